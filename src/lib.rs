@@ -1,0 +1,1 @@
+//! plateau: usable gradients for black-box functions (work in progress).
