@@ -1,1 +1,71 @@
-//! plateau: usable gradients for black-box functions (work in progress).
+//! # plateau
+//!
+//! Usable gradients for black-box functions, including functions that are flat almost
+//! everywhere or discontinuous: the image loss of a path tracer when the object you move is
+//! hidden, a simulator, a game engine, a procedural model. No derivative of `f` is ever
+//! needed, only its values.
+//!
+//! ## The method
+//! Following Fischer and Ritschel, "Plateau-reduced Differentiable Path Tracing" (CVPR 2023),
+//! the objective is smoothed by a Gaussian in parameter space,
+//!
+//! ```text
+//! Q_sigma(theta) = E_{tau ~ N(0, sigma^2 I)} f(theta + tau),
+//! grad Q_sigma(theta) = E[ f(theta + tau) tau ] / sigma^2,
+//! ```
+//!
+//! and the optimiser follows `grad Q_sigma`. `Q` has no plateaus: the kernel's infinite
+//! support lets every distant change of `f` be felt at `theta`. The gradient is estimated by
+//! Monte Carlo: the perturbations are importance-sampled from the kernel's derivative and
+//! paired with their opposites (antithetic sampling), see [`Sampling`]. A schedule
+//! ([`Annealer`]) shrinks `sigma` as the optimisation closes in, and [`Adam`] takes the steps.
+//!
+//! ## The crate in one screen
+//! - [`PlateauFreeGradient`]: the estimator for any `Fn(&[f64]) -> f64`, a seeded closure
+//!   ([`Seeded`], for common random numbers), a batch closure ([`Batch`]) or any
+//!   [`Objective`]; returns an [`Estimate`].
+//! - [`Sampling`]: `Radial` (default, exact in every dimension), `PerCoordinate` (the paper's
+//!   reference sampler), `Gaussian` (plain evolution strategies).
+//! - [`Annealer`]: the paper's warm-start-then-linear schedule, and constant, exponential and
+//!   cosine ones.
+//! - [`Adam`]: with optional box bounds.
+//! - [`Optimizer`]: the loop, with an observer and a [`History`].
+//! - [`baseline`]: finite differences and SPSA, for comparison on the same loop.
+//! - [`kernel`]: the Gaussian kernel, the inverse CDF of its derivative, `c_n`.
+//! - [`Error`]: every way an input can be wrong. Nothing here panics on bad input.
+//!
+//! ## Example
+//! A tilted step `1[x + 2y > 0.3]` started on its flat side, where every plain gradient is
+//! zero:
+//!
+//! ```
+//! use plateau::{Adam, Annealer, Optimizer, PlateauFreeGradient};
+//!
+//! let f = |x: &[f64]| if x[0] + 2.0 * x[1] > 0.3 { 1.0 } else { 0.0 };
+//! let mut grad = PlateauFreeGradient::new(f).samples(8).seed(7);
+//! let mut opt = Optimizer::new(Adam::new(0.02)?, Annealer::paper(0.5, 200)?);
+//! let history = opt.minimize(&mut grad, &[1.0, 1.0])?;
+//! let x = history.last_theta().unwrap();
+//! assert!(x[0] + 2.0 * x[1] < 0.3, "left the plateau: {x:?}");
+//! # Ok::<(), plateau::Error>(())
+//! ```
+
+#![warn(missing_docs)]
+
+mod adam;
+mod anneal;
+pub mod baseline;
+mod error;
+mod estimator;
+pub mod kernel;
+mod objective;
+mod optimize;
+mod sampling;
+
+pub use adam::Adam;
+pub use anneal::{Annealer, Schedule, PAPER_SIGMA_MIN, PAPER_WARMUP};
+pub use error::Error;
+pub use estimator::{Estimate, GradientEstimator, PlateauFreeGradient};
+pub use objective::{Batch, Objective, Points, Seeded};
+pub use optimize::{History, Optimizer, Step};
+pub use sampling::Sampling;

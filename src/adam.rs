@@ -1,0 +1,229 @@
+//! `Adam`: the optimiser the paper uses, with optional box bounds.
+
+use crate::error::{check_len, check_positive, Error};
+
+/// Adam (Kingma and Ba, 2015) with bias correction and optional box bounds: after each step
+/// every coordinate is projected into `[lower_i, upper_i]`.
+///
+/// ```
+/// use plateau::Adam;
+/// let mut adam = Adam::new(0.1)?.bounds(vec![0.0], vec![1.0])?;
+/// let mut theta = vec![0.05];
+/// adam.step(&mut theta, &[1.0])?;   // a step of about lr downhill, then clipped at 0
+/// assert_eq!(theta, vec![0.0]);
+/// # Ok::<(), plateau::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct Adam {
+    lr: f64,
+    beta1: f64,
+    beta2: f64,
+    epsilon: f64,
+    bounds: Option<(Vec<f64>, Vec<f64>)>,
+    m: Vec<f64>,
+    v: Vec<f64>,
+    t: i32,
+}
+
+impl Adam {
+    /// Adam with learning rate `lr` and the usual defaults: beta1 0.9, beta2 0.999, epsilon
+    /// 1e-8.
+    ///
+    /// # Errors
+    /// `lr` not finite and positive.
+    pub fn new(lr: f64) -> Result<Self, Error> {
+        check_positive("lr", lr)?;
+        Ok(Adam {
+            lr,
+            beta1: 0.9,
+            beta2: 0.999,
+            epsilon: 1e-8,
+            bounds: None,
+            m: Vec::new(),
+            v: Vec::new(),
+            t: 0,
+        })
+    }
+
+    /// The decay rates of the first and second moment estimates.
+    ///
+    /// # Errors
+    /// A rate outside `[0, 1)`.
+    pub fn betas(mut self, beta1: f64, beta2: f64) -> Result<Self, Error> {
+        for (name, beta) in [("beta1", beta1), ("beta2", beta2)] {
+            if !(0.0..1.0).contains(&beta) {
+                return Err(Error::InvalidParameter {
+                    name,
+                    value: beta,
+                    reason: "must be in [0, 1)",
+                });
+            }
+        }
+        self.beta1 = beta1;
+        self.beta2 = beta2;
+        Ok(self)
+    }
+
+    /// The term that keeps the step finite where the second moment is zero.
+    ///
+    /// # Errors
+    /// `epsilon` not finite and positive.
+    pub fn epsilon(mut self, epsilon: f64) -> Result<Self, Error> {
+        check_positive("epsilon", epsilon)?;
+        self.epsilon = epsilon;
+        Ok(self)
+    }
+
+    /// Box bounds: after every step, coordinate `i` is clamped into `[lower[i], upper[i]]`.
+    /// Infinite bounds are allowed (a one-sided box).
+    ///
+    /// # Errors
+    /// Lengths that differ, a NaN bound, or `lower[i] > upper[i]`.
+    pub fn bounds(mut self, lower: Vec<f64>, upper: Vec<f64>) -> Result<Self, Error> {
+        check_len("upper bounds", upper.len(), lower.len())?;
+        for (index, (&lo, &hi)) in lower.iter().zip(&upper).enumerate() {
+            if lo.is_nan() || hi.is_nan() || lo > hi {
+                return Err(Error::InvalidBounds {
+                    index,
+                    lower: lo,
+                    upper: hi,
+                });
+            }
+        }
+        self.bounds = Some((lower, upper));
+        Ok(self)
+    }
+
+    /// The learning rate.
+    pub fn lr(&self) -> f64 {
+        self.lr
+    }
+
+    /// The number of steps taken since construction or [`Adam::reset`].
+    pub fn steps(&self) -> usize {
+        self.t as usize
+    }
+
+    /// Forgets the moment estimates (the next step is a first step again).
+    pub fn reset(&mut self) {
+        self.m.clear();
+        self.v.clear();
+        self.t = 0;
+    }
+
+    /// One step downhill: `theta -= lr * m_hat / (sqrt(v_hat) + epsilon)`, then the
+    /// projection onto the bounds.
+    ///
+    /// # Errors
+    /// `gradient` or the bounds of a different length than `theta`, a non-finite gradient
+    /// coordinate, or a `theta` whose length changed since the first step. On error `theta`
+    /// and the optimiser's state are unchanged.
+    pub fn step(&mut self, theta: &mut [f64], gradient: &[f64]) -> Result<(), Error> {
+        let n = theta.len();
+        check_len("gradient", gradient.len(), n)?;
+        if let Some((lower, _)) = &self.bounds {
+            check_len("bounds", lower.len(), n)?;
+        }
+        if let Some(index) = gradient.iter().position(|g| !g.is_finite()) {
+            return Err(Error::NonFiniteGradient {
+                index,
+                value: gradient[index],
+            });
+        }
+        if self.t == 0 {
+            self.m = vec![0.0; n];
+            self.v = vec![0.0; n];
+        } else {
+            check_len("theta (since the first step)", n, self.m.len())?;
+        }
+        self.t = self.t.saturating_add(1);
+        let correct1 = 1.0 - self.beta1.powi(self.t);
+        let correct2_sqrt = (1.0 - self.beta2.powi(self.t)).sqrt();
+        let (sqrt_beta2, sqrt_one_minus_beta2) = (self.beta2.sqrt(), (1.0 - self.beta2).sqrt());
+        for i in 0..n {
+            let g = gradient[i];
+            self.m[i] = self.beta1 * self.m[i] + (1.0 - self.beta1) * g;
+            // `v` holds the root of the second moment: g^2 overflows for |g| > 1e154, its
+            // root never does, and the hypotenuse is only needed when the values are huge.
+            let (a, b) = (sqrt_beta2 * self.v[i], sqrt_one_minus_beta2 * g.abs());
+            self.v[i] = if a.max(b) < 1e150 {
+                (a * a + b * b).sqrt()
+            } else {
+                a.hypot(b)
+            };
+            let m_hat = self.m[i] / correct1;
+            theta[i] -= self.lr * m_hat / (self.v[i] / correct2_sqrt + self.epsilon);
+        }
+        if let Some((lower, upper)) = &self.bounds {
+            for ((x, lo), hi) in theta.iter_mut().zip(lower).zip(upper) {
+                *x = x.clamp(*lo, *hi);
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn first_step_has_length_lr_against_the_gradient_sign() {
+        let mut adam = Adam::new(0.01).unwrap();
+        let mut theta = vec![1.0, 1.0, 1.0];
+        adam.step(&mut theta, &[3.0, -1e-3, 0.0]).unwrap();
+        assert!((theta[0] - 0.99).abs() < 1e-9);
+        assert!((theta[1] - 1.01).abs() < 1e-6);
+        assert_eq!(theta[2], 1.0);
+    }
+
+    #[test]
+    fn minimises_a_quadratic() {
+        let mut adam = Adam::new(0.05).unwrap();
+        let mut x = vec![3.0, -2.0];
+        for _ in 0..2000 {
+            let g = vec![2.0 * (x[0] - 1.0), 20.0 * (x[1] + 0.5)];
+            adam.step(&mut x, &g).unwrap();
+        }
+        assert!(
+            (x[0] - 1.0).abs() < 1e-3 && (x[1] + 0.5).abs() < 1e-3,
+            "{x:?}"
+        );
+    }
+
+    #[test]
+    fn rejects_bad_input_without_changing_state() {
+        let mut adam = Adam::new(0.1).unwrap();
+        let mut x = vec![0.0, 0.0];
+        assert!(matches!(
+            adam.step(&mut x, &[1.0]),
+            Err(Error::LengthMismatch { .. })
+        ));
+        assert!(matches!(
+            adam.step(&mut x, &[1.0, f64::NAN]),
+            Err(Error::NonFiniteGradient { index: 1, .. })
+        ));
+        assert_eq!(adam.steps(), 0);
+        assert_eq!(x, vec![0.0, 0.0]);
+        assert!(Adam::new(0.0).is_err());
+        assert!(Adam::new(0.1)
+            .unwrap()
+            .bounds(vec![1.0], vec![0.0])
+            .is_err());
+        assert!(Adam::new(0.1)
+            .unwrap()
+            .bounds(vec![f64::NAN], vec![0.0])
+            .is_err());
+        assert!(Adam::new(0.1).unwrap().betas(1.0, 0.9).is_err());
+    }
+
+    #[test]
+    fn huge_gradients_stay_finite() {
+        let mut adam = Adam::new(0.1).unwrap();
+        let mut x = vec![0.0];
+        adam.step(&mut x, &[1e300]).unwrap();
+        assert!((x[0] + 0.1).abs() < 1e-9, "{x:?}");
+        adam.step(&mut x, &[-1.7e308]).unwrap();
+        assert!(x[0].is_finite() && x[0] > -0.1, "{x:?}");
+    }
+}

@@ -1,0 +1,191 @@
+//! Baselines that show the plateau failure on the same objective and the same loop: a
+//! small-step central finite difference (what a gradient sees without smoothing: zero on a
+//! plateau) and SPSA (Spall, 1992).
+
+use rand::{RngExt, SeedableRng};
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+use crate::error::{check_positive, check_sigma, check_theta, Error};
+use crate::estimator::{stream_seed, Estimate, GradientEstimator};
+use crate::objective::Objective;
+
+/// Central finite differences `(f(theta + h e_i) - f(theta - h e_i)) / 2h` with a fixed
+/// step `h`, `2n` evaluations per gradient. The spread handed in by the loop is ignored: this
+/// is the unsmoothed gradient.
+///
+/// ```
+/// use plateau::baseline::FiniteDifference;
+/// use plateau::GradientEstimator;
+/// let step = |x: &[f64]| if x[0] > 0.5 { 1.0 } else { 0.0 };
+/// let mut fd = FiniteDifference::new(step, 1e-3)?;
+/// // On the plateau the finite difference is exactly zero.
+/// assert_eq!(fd.estimate(&[2.0], 0.5)?.gradient, vec![0.0]);
+/// # Ok::<(), plateau::Error>(())
+/// ```
+pub struct FiniteDifference<F> {
+    objective: F,
+    step: f64,
+    seed: u64,
+    estimates: u64,
+    point: Vec<f64>,
+}
+
+impl<F: Objective> FiniteDifference<F> {
+    /// Central differences of step `step`.
+    ///
+    /// # Errors
+    /// `step` not finite and positive.
+    pub fn new(objective: F, step: f64) -> Result<Self, Error> {
+        check_positive("step", step)?;
+        Ok(FiniteDifference {
+            objective,
+            step,
+            seed: 0,
+            estimates: 0,
+            point: Vec::new(),
+        })
+    }
+
+    /// The seed handed to a seeded objective (the same for both sides of a difference).
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+}
+
+impl<F: Objective> GradientEstimator for FiniteDifference<F> {
+    fn estimate(&mut self, theta: &[f64], _sigma: f64) -> Result<Estimate, Error> {
+        check_theta(theta)?;
+        let n = theta.len();
+        let h = self.step;
+        let index = self.estimates;
+        self.estimates += 1;
+        self.point.clear();
+        self.point.extend_from_slice(theta);
+        let mut gradient = vec![0.0; n];
+        let mut mean_value = 0.0;
+        for i in 0..n {
+            let seed = stream_seed(self.seed, index, i as u64);
+            let side = |x: f64, sample: usize, point: &mut Vec<f64>| -> Result<f64, Error> {
+                point[i] = x;
+                let v = self.objective.evaluate(point, seed);
+                if v.is_finite() {
+                    Ok(v)
+                } else {
+                    Err(Error::NonFiniteValue {
+                        sample,
+                        value: v,
+                        point: point.clone(),
+                    })
+                }
+            };
+            let plus = side(theta[i] + h, 2 * i, &mut self.point)?;
+            let minus = side(theta[i] - h, 2 * i + 1, &mut self.point)?;
+            self.point[i] = theta[i];
+            gradient[i] = (0.5 * plus - 0.5 * minus) / h;
+            mean_value += (plus + minus) / (2 * n) as f64;
+        }
+        if let Some(index) = gradient.iter().position(|g| !g.is_finite()) {
+            return Err(Error::NonFiniteGradient {
+                index,
+                value: gradient[index],
+            });
+        }
+        Ok(Estimate {
+            gradient,
+            evaluations: 2 * n,
+            mean_value,
+        })
+    }
+}
+
+/// Simultaneous-perturbation stochastic approximation: one Rademacher direction `delta`,
+/// `g_i = (f(theta + c delta) - f(theta - c delta)) / (2 c delta_i)`, 2 evaluations per
+/// gradient whatever the dimension. `c` is the spread handed in by the loop, so the annealer
+/// plays the role of SPSA's decaying perturbation size.
+///
+/// ```
+/// use plateau::baseline::Spsa;
+/// use plateau::GradientEstimator;
+/// let linear = |x: &[f64]| 3.0 * x[0] - x[1];
+/// let g = Spsa::new(linear).estimate(&[0.0, 0.0], 0.1)?.gradient;
+/// // Exact on a linear function up to the cross terms: each coordinate is 3 +- 1 or -1 +- 3.
+/// assert!((g[0] - 2.0).abs() < 1e-12 || (g[0] - 4.0).abs() < 1e-12);
+/// # Ok::<(), plateau::Error>(())
+/// ```
+pub struct Spsa<F> {
+    objective: F,
+    seed: u64,
+    estimates: u64,
+    points: Vec<f64>,
+}
+
+impl<F: Objective> Spsa<F> {
+    /// SPSA on `objective`.
+    pub fn new(objective: F) -> Self {
+        Spsa {
+            objective,
+            seed: 0,
+            estimates: 0,
+            points: Vec::new(),
+        }
+    }
+
+    /// The seed of the directions and of the objective's seeds.
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+}
+
+impl<F: Objective> GradientEstimator for Spsa<F> {
+    fn estimate(&mut self, theta: &[f64], sigma: f64) -> Result<Estimate, Error> {
+        check_sigma(sigma)?;
+        check_theta(theta)?;
+        let n = theta.len();
+        let index = self.estimates;
+        self.estimates += 1;
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(self.seed, index, 0));
+        let delta: Vec<f64> = (0..n)
+            .map(|_| if rng.random::<bool>() { 1.0 } else { -1.0 })
+            .collect();
+        self.points.clear();
+        self.points
+            .extend(theta.iter().zip(&delta).map(|(t, d)| t + sigma * d));
+        self.points
+            .extend(theta.iter().zip(&delta).map(|(t, d)| t - sigma * d));
+        if let Some(at) = self.points.iter().position(|x| !x.is_finite()) {
+            return Err(Error::NonFinitePoint {
+                sample: at / n,
+                index: at % n,
+                value: self.points[at],
+            });
+        }
+        let seed = stream_seed(self.seed, index, 1);
+        let mut values = [0.0; 2];
+        for (k, v) in values.iter_mut().enumerate() {
+            let point = &self.points[k * n..(k + 1) * n];
+            *v = self.objective.evaluate(point, seed);
+            if !v.is_finite() {
+                return Err(Error::NonFiniteValue {
+                    sample: k,
+                    value: *v,
+                    point: point.to_vec(),
+                });
+            }
+        }
+        let half_diff = 0.5 * values[0] - 0.5 * values[1];
+        let gradient: Vec<f64> = delta.iter().map(|d| half_diff / (sigma * d)).collect();
+        if let Some(index) = gradient.iter().position(|g| !g.is_finite()) {
+            return Err(Error::NonFiniteGradient {
+                index,
+                value: gradient[index],
+            });
+        }
+        Ok(Estimate {
+            gradient,
+            evaluations: 2,
+            mean_value: 0.5 * values[0] + 0.5 * values[1],
+        })
+    }
+}

@@ -1,0 +1,212 @@
+//! Every way an input can be wrong, each carrying the offending value.
+
+use std::fmt;
+
+/// The crate's error type: bad input is reported, never panicked on, and never turned into a
+/// silently wrong number.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Error {
+    /// The parameter vector has no coordinates.
+    #[error("theta is empty: the objective needs at least one parameter")]
+    EmptyTheta,
+
+    /// A coordinate of theta is NaN or infinite.
+    #[error("theta[{index}] = {value} is not finite")]
+    NonFiniteTheta {
+        /// The coordinate.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+
+    /// A scalar spread that is not a finite positive number.
+    #[error("sigma = {0} must be finite and > 0")]
+    InvalidSigma(f64),
+
+    /// A per-dimension spread that is not a finite positive number.
+    #[error("spreads[{index}] = {value} must be finite and > 0")]
+    InvalidSpread {
+        /// The coordinate.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+
+    /// Two inputs that must have the same length do not.
+    #[error("length mismatch: {what} has length {got}, expected {expected}")]
+    LengthMismatch {
+        /// Which input has the wrong length.
+        what: &'static str,
+        /// The length it should have.
+        expected: usize,
+        /// The length it has.
+        got: usize,
+    },
+
+    /// The estimator was asked for zero evaluations of `f`.
+    #[error("the number of samples (evaluations of f per estimate) must be at least 1, got 0")]
+    ZeroSamples,
+
+    /// Antithetic pairs evaluate `f` twice per draw, so the count must be even.
+    #[error("antithetic pairs need an even number of samples, got {0}; use an even count or .antithetic(false)")]
+    OddSamples(usize),
+
+    /// Orthogonal directions only make sense for samplers that draw a direction.
+    #[error("orthogonal directions need Sampling::Radial or Sampling::Gaussian, not {0:?}")]
+    OrthogonalUnsupported(crate::Sampling),
+
+    /// A perturbed point overflowed (theta plus its offset is not finite).
+    #[error(
+        "perturbed point {sample} has coordinate {index} = {value} (theta plus offset overflowed)"
+    )]
+    NonFinitePoint {
+        /// Which evaluation of the estimate.
+        sample: usize,
+        /// The coordinate.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+
+    /// The objective returned NaN or an infinity.
+    #[error("f returned {value} at evaluation {sample}, point {}", Preview(point))]
+    NonFiniteValue {
+        /// Which evaluation of the estimate.
+        sample: usize,
+        /// The value f returned.
+        value: f64,
+        /// The point at which f was evaluated.
+        point: Vec<f64>,
+    },
+
+    /// The gradient overflowed: values of f too large for the spread (for example f near
+    /// 1e300 with sigma 1e-12). Rescale f or enlarge sigma.
+    #[error("gradient coordinate {index} = {value} is not finite: f's values are too large for the spread; rescale f")]
+    NonFiniteGradient {
+        /// The coordinate.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+
+    /// A configuration value out of its range (annealer, optimiser, baselines).
+    #[error("{name} = {value} is invalid: {reason}")]
+    InvalidParameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// What it must satisfy.
+        reason: &'static str,
+    },
+
+    /// A lower bound above its upper bound.
+    #[error("bounds[{index}]: lower {lower} > upper {upper} (or not a number)")]
+    InvalidBounds {
+        /// The coordinate.
+        index: usize,
+        /// The lower bound.
+        lower: f64,
+        /// The upper bound.
+        upper: f64,
+    },
+}
+
+/// Shows at most eight coordinates: a point may have a million.
+struct Preview<'a>(&'a [f64]);
+
+impl fmt::Display for Preview<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        const SHOWN: usize = 8;
+        write!(f, "[")?;
+        for (i, x) in self.0.iter().take(SHOWN).enumerate() {
+            if i > 0 {
+                write!(f, ", ")?;
+            }
+            write!(f, "{x}")?;
+        }
+        if self.0.len() > SHOWN {
+            write!(f, ", ... ({} coordinates)", self.0.len())?;
+        }
+        write!(f, "]")
+    }
+}
+
+/// Checks a parameter vector: non-empty, all finite.
+pub(crate) fn check_theta(theta: &[f64]) -> Result<(), Error> {
+    if theta.is_empty() {
+        return Err(Error::EmptyTheta);
+    }
+    match theta.iter().position(|x| !x.is_finite()) {
+        Some(index) => Err(Error::NonFiniteTheta {
+            index,
+            value: theta[index],
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Checks a scalar spread.
+pub(crate) fn check_sigma(sigma: f64) -> Result<(), Error> {
+    if sigma.is_finite() && sigma > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidSigma(sigma))
+    }
+}
+
+/// Checks per-dimension spreads against theta's length.
+pub(crate) fn check_spreads(spreads: &[f64], dim: usize) -> Result<(), Error> {
+    check_len("spreads", spreads.len(), dim)?;
+    match spreads.iter().position(|s| !(s.is_finite() && *s > 0.0)) {
+        Some(index) => Err(Error::InvalidSpread {
+            index,
+            value: spreads[index],
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Checks that a length matches.
+pub(crate) fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), Error> {
+    if got == expected {
+        Ok(())
+    } else {
+        Err(Error::LengthMismatch {
+            what,
+            expected,
+            got,
+        })
+    }
+}
+
+/// Checks a positive finite configuration value.
+pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<(), Error> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidParameter {
+            name,
+            value,
+            reason: "must be finite and > 0",
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_points_are_previewed() {
+        let e = Error::NonFiniteValue {
+            sample: 3,
+            value: f64::NAN,
+            point: vec![0.5; 100],
+        };
+        let text = e.to_string();
+        assert!(text.contains("evaluation 3"), "{text}");
+        assert!(text.contains("(100 coordinates)"), "{text}");
+        assert!(text.len() < 200, "{text}");
+    }
+}
