@@ -1,0 +1,23 @@
+//! Optimise a 2-D tilted step from a start on its plateau, where every plain gradient is 0.
+//!
+//! `cargo run --release --example quickstart`
+use plateau::{Adam, Annealer, Optimizer, PlateauFreeGradient};
+
+fn main() -> Result<(), plateau::Error> {
+    // A loss of 1 above the line x + 2y = 0.3 and 0 below it: flat on both sides.
+    let loss = |x: &[f64]| if x[0] + 2.0 * x[1] > 0.3 { 1.0 } else { 0.0 };
+    let mut grad = PlateauFreeGradient::new(loss).samples(4).seed(1);
+    let mut opt = Optimizer::new(Adam::new(0.02)?, Annealer::paper(0.5, 200)?);
+    let history = opt.minimize_with(&mut grad, &[1.0, 1.0], |step| {
+        if step.iteration % 40 == 0 {
+            println!(
+                "iter {:3}  sigma {:.3}  theta {:.3?}  smoothed loss {:.3}",
+                step.iteration, step.sigma, step.theta, step.estimate.mean_value
+            );
+        }
+        std::ops::ControlFlow::Continue(())
+    })?;
+    let x = history.last_theta().expect("ran at least one iteration");
+    println!("final theta {x:.3?}: loss {}", loss(x));
+    Ok(())
+}
