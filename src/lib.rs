@@ -69,3 +69,8 @@ pub use estimator::{Estimate, GradientEstimator, PlateauFreeGradient};
 pub use objective::{Batch, Objective, Points, Seeded};
 pub use optimize::{History, Optimizer, Step};
 pub use sampling::Sampling;
+
+/// The README's examples, compiled and run as doctests so that they stay true.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
