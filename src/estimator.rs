@@ -83,6 +83,9 @@ struct Buffers {
     seeds: Vec<u64>,
     values: Vec<f64>,
     diffs: Vec<f64>,
+    /// `(n, c_n)` of the last estimate: two log-gammas per estimate are a noticeable share
+    /// of the cost when `n` is small.
+    chi_mean: Option<(usize, f64)>,
 }
 
 impl<F: Objective> PlateauFreeGradient<F> {
@@ -214,7 +217,14 @@ impl<F: Objective> PlateauFreeGradient<F> {
         b.values.resize(evaluations, 0.0);
         b.diffs.resize(draws, 0.0);
 
-        let c_n = chi_mean(n);
+        let c_n = match b.chi_mean {
+            Some((dim, c)) if dim == n => c,
+            _ => {
+                let c = chi_mean(n);
+                b.chi_mean = Some((n, c));
+                c
+            }
+        };
         draw_all(
             self.sampling,
             self.orthogonal,
@@ -290,14 +300,18 @@ impl<F: Objective> PlateauFreeGradient<F> {
                 gradient.iter_mut().zip(w).for_each(|(g, wi)| *g += d * wi);
             }
             let common = scale / draws as f64;
-            for ((g, s), i) in gradient.iter_mut().zip(spreads).zip(0..) {
+            // Branch-free so that it vectorises; the rare overflow is located afterwards.
+            let mut all_finite = true;
+            for (g, s) in gradient.iter_mut().zip(spreads) {
                 *g = *g / s * common;
-                if !g.is_finite() {
-                    return Err(Error::NonFiniteGradient {
-                        index: i,
-                        value: *g,
-                    });
-                }
+                all_finite &= g.is_finite();
+            }
+            if !all_finite {
+                let index = gradient.iter().position(|g| !g.is_finite()).unwrap_or(0);
+                return Err(Error::NonFiniteGradient {
+                    index,
+                    value: gradient[index],
+                });
             }
         }
         let mean_value = b.values.iter().map(|v| v / evaluations as f64).sum();

@@ -97,10 +97,18 @@ impl Sampling {
                     let bits: u64 = rng.random();
                     // The top bit is the sign; the rest (shifted in) is the uniform. Using one
                     // 64-bit draw for both halves the generator's work per coordinate.
-                    let sign = if bits >> 63 == 1 { -1.0 } else { 1.0 };
-                    let rho = rayleigh_inverse_cdf(unit_open_closed(bits << 1), 1.0);
-                    *zi = sign * rho;
-                    *wi = sign * weight;
+                    *wi = if bits >> 63 == 1 { -weight } else { weight };
+                    *zi = unit_open_closed(bits << 1);
+                }
+                // The radius in passes of its own: the logarithm is a call that the loop
+                // above would wait on, while this square root and sign vectorise. Same
+                // operations as `rayleigh_inverse_cdf(xi, 1.0)` times the sign, bit for bit.
+                for zi in z.iter_mut() {
+                    *zi = zi.ln();
+                }
+                for (zi, wi) in z.iter_mut().zip(w.iter()) {
+                    let rho = (-2.0 * *zi).sqrt();
+                    *zi = if *wi < 0.0 { -rho } else { rho };
                 }
             }
             Sampling::Gaussian => {
