@@ -3,10 +3,10 @@
 //! The optimiser sees only [`Task::render`] (and the loss it computes from two images); a
 //! task knows nothing of gradients.
 
-// mod caustic;
-// mod cup;
-// mod gi;
-// mod occlusion;
+mod caustic;
+mod cup;
+mod gi;
+mod occlusion;
 mod shadow;
 // mod sort;
 // mod texture;
@@ -117,12 +117,12 @@ pub trait Task: Send + Sync {
 /// Every task, in the paper's order (TEXTURE last).
 pub fn all() -> Vec<Box<dyn Task>> {
     vec![
-        // Box::new(cup::Cup::new()),
+        Box::new(cup::Cup::new()),
         Box::new(shadow::Shadow::new()),
-        // Box::new(occlusion::Occlusion::new()),
-        // Box::new(gi::Gi::new()),
+        Box::new(occlusion::Occlusion::new()),
+        Box::new(gi::Gi::new()),
         // Box::new(sort::Sort::new()),
-        // Box::new(caustic::Caustic::new()),
+        Box::new(caustic::Caustic::new()),
         // Box::new(texture::TextureTask::new()),
     ]
 }
@@ -131,12 +131,12 @@ pub fn all() -> Vec<Box<dyn Task>> {
 pub fn by_name(name: &str) -> Option<Box<dyn Task>> {
     let name = name.to_ascii_lowercase();
     let task: Box<dyn Task> = match name.as_str() {
-        // "cup" => Box::new(cup::Cup::new()),
+        "cup" => Box::new(cup::Cup::new()),
         "shadow" => Box::new(shadow::Shadow::new()),
-        // "occlusion" => Box::new(occlusion::Occlusion::new()),
-        // "gi" => Box::new(gi::Gi::new()),
+        "occlusion" => Box::new(occlusion::Occlusion::new()),
+        "gi" => Box::new(gi::Gi::new()),
         // "sort" => Box::new(sort::Sort::new()),
-        // "caustic" => Box::new(caustic::Caustic::new()),
+        "caustic" => Box::new(caustic::Caustic::new()),
         // "texture" => Box::new(texture::TextureTask::new()),
         _ => return None,
     };
