@@ -2,7 +2,11 @@
 //!
 //! `render` draws one task at given parameters; the optimisation front-ends come later.
 
+// The renderer and the tasks are this example's internal library: each front-end (render,
+// optimize, the benches, the tests) uses a different part of their public surface.
+#[allow(dead_code)]
 mod render;
+#[allow(dead_code)]
 mod tasks;
 
 use std::path::PathBuf;

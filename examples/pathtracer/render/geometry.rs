@@ -128,7 +128,9 @@ impl Quad {
             return f32::INFINITY;
         }
         let t = (self.plane_d - self.normal.dot(o)) / denom;
-        if !(t > T_MIN && t < tmax) {
+        // Written so that a NaN t counts as a miss.
+        let in_range = t > T_MIN && t < tmax;
+        if !in_range {
             return f32::INFINITY;
         }
         let q = o + t * d - self.origin;

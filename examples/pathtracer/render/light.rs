@@ -85,7 +85,9 @@ impl Lights {
         let dist = dist2.sqrt();
         let dir = to / dist;
         let cos_l = -q.normal.dot(dir);
-        if !(cos_l > 1e-7) || !(dist > 0.0) {
+        // Written so that NaNs (a degenerate quad or a point on the light) reject the sample.
+        let usable = cos_l > 1e-7 && dist > 0.0;
+        if !usable {
             return None;
         }
         Some(AreaSample {

@@ -8,8 +8,8 @@ mod cup;
 mod gi;
 mod occlusion;
 mod shadow;
-// mod sort;
-// mod texture;
+mod sort;
+mod texture;
 
 use glam::Vec3;
 
@@ -121,9 +121,9 @@ pub fn all() -> Vec<Box<dyn Task>> {
         Box::new(shadow::Shadow::new()),
         Box::new(occlusion::Occlusion::new()),
         Box::new(gi::Gi::new()),
-        // Box::new(sort::Sort::new()),
+        Box::new(sort::Sort::new()),
         Box::new(caustic::Caustic::new()),
-        // Box::new(texture::TextureTask::new()),
+        Box::new(texture::TextureTask::new()),
     ]
 }
 
@@ -135,9 +135,9 @@ pub fn by_name(name: &str) -> Option<Box<dyn Task>> {
         "shadow" => Box::new(shadow::Shadow::new()),
         "occlusion" => Box::new(occlusion::Occlusion::new()),
         "gi" => Box::new(gi::Gi::new()),
-        // "sort" => Box::new(sort::Sort::new()),
+        "sort" => Box::new(sort::Sort::new()),
         "caustic" => Box::new(caustic::Caustic::new()),
-        // "texture" => Box::new(texture::TextureTask::new()),
+        "texture" => Box::new(texture::TextureTask::new()),
         _ => return None,
     };
     Some(task)
