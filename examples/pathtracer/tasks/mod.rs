@@ -4,7 +4,7 @@
 //! task knows nothing of gradients.
 
 mod caustic;
-mod cup;
+pub mod cup;
 mod gi;
 mod occlusion;
 mod shadow;
