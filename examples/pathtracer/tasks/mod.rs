@@ -220,4 +220,37 @@ mod tests {
             );
         }
     }
+
+    /// The plateau the paper is about: near the start of CUP, SHADOW and OCCLUSION a small
+    /// move leaves the loss (image MSE to the target, same seed) nearly unchanged, while the
+    /// loss itself is large. A finite-difference gradient sees (almost) nothing there.
+    #[test]
+    fn start_sits_on_a_loss_plateau() {
+        let view = View {
+            scale: Some(0.5),
+            ..Default::default()
+        };
+        for (name, step) in [("cup", 0.02), ("shadow", 0.1), ("occlusion", 0.05)] {
+            let task = by_name(name).expect("task");
+            let reference = task.render(&task.target(), 3, 8, view);
+            let loss = |theta: &[f64]| task.render(theta, 3, 8, view).mse(&reference);
+            let start = task.start();
+            let l0 = loss(&start);
+            for i in 0..task.dim() {
+                for sign in [-1.0, 1.0] {
+                    let mut moved = start.clone();
+                    moved[i] += sign * step;
+                    let l = loss(&moved);
+                    eprintln!(
+                        "{name} dim {i} step {}: loss {l0:.3e} -> {l:.3e}",
+                        sign * step
+                    );
+                    assert!(
+                        (l - l0).abs() < 0.05 * l0,
+                        "{name}: loss {l0} -> {l} for a {step} step in dim {i}"
+                    );
+                }
+            }
+        }
+    }
 }
