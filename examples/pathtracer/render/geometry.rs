@@ -1,0 +1,583 @@
+//! Shapes and ray-scene intersection.
+//!
+//! Analytic shapes (spheres, parallelograms, boxes) cover most scenes at a few dozen
+//! instructions per test; triangle meshes live in an obvhs BVH built once and are moved by
+//! transforming rays into the mesh's frame (instancing), so a new pose costs nothing.
+
+use std::sync::Arc;
+
+use glam::{Mat3A, Vec2, Vec3, Vec3A};
+use obvhs::{
+    aabb::Aabb,
+    bvh2::{builder::build_bvh2, Bvh2},
+    cwbvh::{builder::build_cwbvh_from_tris, CwBvh},
+    ray::{Ray as BvhRay, RayHit},
+    triangle::Triangle,
+    BvhBuildParams,
+};
+
+/// Marks a surface that is not an area light.
+pub const NO_LIGHT: u32 = u32::MAX;
+
+/// Hits closer than this are self-intersections (origins are also offset along the normal).
+const T_MIN: f32 = 1e-6;
+
+/// A sphere.
+#[derive(Clone, Copy, Debug)]
+pub struct Sphere {
+    /// Centre.
+    pub center: Vec3A,
+    /// Radius.
+    pub radius: f32,
+    /// Index into the scene's materials.
+    pub material: u32,
+}
+
+impl Sphere {
+    /// A sphere of `radius` at `center` made of `material`.
+    pub fn new(center: Vec3, radius: f32, material: u32) -> Self {
+        Self {
+            center: center.into(),
+            radius,
+            material,
+        }
+    }
+
+    #[inline(always)]
+    fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
+        let oc = o - self.center;
+        let b = oc.dot(d);
+        // r^2 - |oc - b d|^2 rather than b^2 - (|oc|^2 - r^2): no cancellation for far rays.
+        let l = oc - b * d;
+        let disc = self.radius * self.radius - l.length_squared();
+        if disc < 0.0 {
+            return f32::INFINITY;
+        }
+        let s = disc.sqrt();
+        let t0 = -b - s;
+        if t0 > T_MIN && t0 < tmax {
+            return t0;
+        }
+        let t1 = -b + s;
+        if t1 > T_MIN && t1 < tmax {
+            return t1;
+        }
+        f32::INFINITY
+    }
+}
+
+/// A parallelogram `origin + a u + b v`, (a, b) in [0, 1]^2; its (a, b) are the texture uv.
+/// Emitting quads are one-sided area lights facing `normal = normalize(u x v)`.
+#[derive(Clone, Copy, Debug)]
+pub struct Quad {
+    /// One corner.
+    pub origin: Vec3A,
+    /// First edge.
+    pub u: Vec3A,
+    /// Second edge.
+    pub v: Vec3A,
+    /// Unit normal, `normalize(u x v)`.
+    pub normal: Vec3A,
+    /// Area, `|u x v|`.
+    pub area: f32,
+    plane_d: f32,
+    /// Dotted with the in-plane offset, gives the `a` coordinate.
+    a_axis: Vec3A,
+    /// Dotted with the in-plane offset, gives the `b` coordinate.
+    b_axis: Vec3A,
+    /// Index into the scene's materials.
+    pub material: u32,
+    /// Emitted radiance (zero for non-emitters).
+    pub emission: Vec3A,
+    /// Index into the scene's area lights, or [`NO_LIGHT`].
+    pub light: u32,
+}
+
+impl Quad {
+    /// The parallelogram with corner `origin` and edges `u`, `v`.
+    pub fn new(origin: Vec3, u: Vec3, v: Vec3, material: u32) -> Self {
+        let (u, v): (Vec3A, Vec3A) = (u.into(), v.into());
+        let cross = u.cross(v);
+        let area = cross.length();
+        let normal = cross / area;
+        let w = cross / cross.length_squared();
+        Self {
+            origin: origin.into(),
+            u,
+            v,
+            normal,
+            area,
+            plane_d: normal.dot(origin.into()),
+            a_axis: v.cross(w),
+            b_axis: w.cross(u),
+            material,
+            emission: Vec3A::ZERO,
+            light: NO_LIGHT,
+        }
+    }
+
+    /// The axis-aligned rectangle centred at `center` with edges `u`, `v` (full lengths).
+    pub fn centered(center: Vec3, u: Vec3, v: Vec3, material: u32) -> Self {
+        Self::new(center - 0.5 * u - 0.5 * v, u, v, material)
+    }
+
+    #[inline(always)]
+    fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
+        let denom = self.normal.dot(d);
+        if denom.abs() < 1e-12 {
+            return f32::INFINITY;
+        }
+        let t = (self.plane_d - self.normal.dot(o)) / denom;
+        // Written so that a NaN t counts as a miss.
+        let in_range = t > T_MIN && t < tmax;
+        if !in_range {
+            return f32::INFINITY;
+        }
+        let q = o + t * d - self.origin;
+        let a = q.dot(self.a_axis);
+        let b = q.dot(self.b_axis);
+        if (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) {
+            t
+        } else {
+            f32::INFINITY
+        }
+    }
+
+    #[inline(always)]
+    fn uv(&self, p: Vec3A) -> Vec2 {
+        let q = p - self.origin;
+        Vec2::new(q.dot(self.a_axis), q.dot(self.b_axis))
+    }
+
+    /// The point at parallelogram coordinates (`a`, `b`).
+    #[inline(always)]
+    pub fn point(&self, a: f32, b: f32) -> Vec3A {
+        self.origin + a * self.u + b * self.v
+    }
+}
+
+/// A box rotated by `rotation` about its centre.
+#[derive(Clone, Copy, Debug)]
+pub struct OrientedBox {
+    center: Vec3A,
+    half: Vec3A,
+    /// Local to world.
+    rotation: Mat3A,
+    /// World to local.
+    inverse: Mat3A,
+    /// Index into the scene's materials.
+    pub material: u32,
+}
+
+impl OrientedBox {
+    /// A box with half extents `half` at `center`, turned by `angle` radians about `axis`.
+    pub fn new(center: Vec3, half: Vec3, axis: Vec3, angle: f32, material: u32) -> Self {
+        let rotation = Mat3A::from_axis_angle(axis.normalize(), angle);
+        Self {
+            center: center.into(),
+            half: half.into(),
+            rotation,
+            inverse: rotation.transpose(),
+            material,
+        }
+    }
+
+    #[inline(always)]
+    fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
+        let lo = self.inverse * (o - self.center);
+        let ld = self.inverse * d;
+        slab(lo, ld.recip(), -self.half, self.half, tmax)
+    }
+
+    fn normal(&self, p: Vec3A) -> Vec3A {
+        let local = self.inverse * (p - self.center);
+        self.rotation * box_face_normal(local, self.half)
+    }
+}
+
+/// The outward normal of the face of a centred box (half extents `half`) nearest `local`.
+#[inline(always)]
+fn box_face_normal(local: Vec3A, half: Vec3A) -> Vec3A {
+    let r = local.abs() / half;
+    if r.x >= r.y && r.x >= r.z {
+        Vec3A::new(local.x.signum(), 0.0, 0.0)
+    } else if r.y >= r.z {
+        Vec3A::new(0.0, local.y.signum(), 0.0)
+    } else {
+        Vec3A::new(0.0, 0.0, local.z.signum())
+    }
+}
+
+/// Ray/axis-aligned box distance, or infinity.
+#[inline(always)]
+fn slab(o: Vec3A, inv_d: Vec3A, min: Vec3A, max: Vec3A, tmax: f32) -> f32 {
+    let t1 = (min - o) * inv_d;
+    let t2 = (max - o) * inv_d;
+    let tn = t1.min(t2).max_element();
+    let tf = t1.max(t2).min_element();
+    if tn <= tf && tf > T_MIN && tn < tmax {
+        if tn > T_MIN {
+            tn
+        } else {
+            tf
+        }
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// An axis-aligned box of a [`BoxSet`].
+#[derive(Clone, Copy, Debug)]
+pub struct AaBox {
+    /// Minimum corner.
+    pub min: Vec3A,
+    /// Maximum corner.
+    pub max: Vec3A,
+    /// Index into the scene's materials.
+    pub material: u32,
+}
+
+/// Many axis-aligned boxes in their own small BVH, rebuilt when the boxes move (SORT).
+pub struct BoxSet {
+    boxes: Vec<AaBox>,
+    bvh: Bvh2,
+}
+
+impl BoxSet {
+    /// Builds the BVH (PLOC, fastest preset: a rebuild per render must stay cheap).
+    pub fn new(boxes: &[AaBox]) -> Self {
+        let aabbs: Vec<Aabb> = boxes.iter().map(|b| Aabb::new(b.min, b.max)).collect();
+        let mut unused = std::time::Duration::default();
+        let bvh = build_bvh2(&aabbs, BvhBuildParams::fastest_build(), &mut unused);
+        let boxes = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| boxes[i as usize])
+            .collect();
+        Self { boxes, bvh }
+    }
+}
+
+/// Which BVH layout a mesh uses (both from obvhs; the faster is the default, see the bench).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BvhKind {
+    /// Binary BVH.
+    Bvh2,
+    /// Compressed 8-wide BVH, traversed four nodes at a time with SIMD.
+    CwBvh,
+}
+
+enum Accel {
+    Bvh2(Bvh2),
+    CwBvh(CwBvh),
+}
+
+/// A triangle mesh in its own frame, with its BVH.
+pub struct Mesh {
+    /// Triangles, in BVH primitive order.
+    tris: Vec<Triangle>,
+    accel: Accel,
+}
+
+impl Mesh {
+    /// Builds the mesh's BVH (medium-quality preset: built once per task).
+    pub fn new(tris: &[Triangle], kind: BvhKind) -> Self {
+        let mut unused = std::time::Duration::default();
+        let params = BvhBuildParams::medium_build();
+        let (accel, order) = match kind {
+            BvhKind::Bvh2 => {
+                let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(tris, params, &mut unused);
+                let order = bvh.primitive_indices.clone();
+                (Accel::Bvh2(bvh), order)
+            }
+            BvhKind::CwBvh => {
+                let bvh = build_cwbvh_from_tris(tris, params, &mut unused);
+                let order = bvh.primitive_indices.clone();
+                (Accel::CwBvh(bvh), order)
+            }
+        };
+        let tris = order.iter().map(|&i| tris[i as usize]).collect();
+        Self { tris, accel }
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// Closest hit (distance, triangle) of a ray given in the mesh's frame.
+    #[inline(always)]
+    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, u32)> {
+        let ray = BvhRay::new(o, d, T_MIN, tmax);
+        let mut hit = RayHit::none();
+        let found = match &self.accel {
+            Accel::Bvh2(b) => b.ray_traverse(ray, &mut hit, |r, id| self.tris[id].intersect(r)),
+            Accel::CwBvh(b) => b.ray_traverse(ray, &mut hit, |r, id| self.tris[id].intersect(r)),
+        };
+        found.then_some((hit.t, hit.primitive_id))
+    }
+
+    /// Whether anything lies on the ray before `tmax` (ray in the mesh's frame).
+    #[inline(always)]
+    pub fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
+        let ray = BvhRay::new(o, d, T_MIN, tmax);
+        let miss = match &self.accel {
+            Accel::Bvh2(b) => b.ray_traverse_miss(ray, |r, id| self.tris[id].intersect(r)),
+            Accel::CwBvh(b) => b.ray_traverse_miss(ray, |r, id| self.tris[id].intersect(r)),
+        };
+        !miss
+    }
+}
+
+/// A placed copy of a mesh: rigid motion (rotation, then translation).
+#[derive(Clone)]
+pub struct MeshInstance {
+    mesh: Arc<Mesh>,
+    rotation: Mat3A,
+    inverse: Mat3A,
+    translation: Vec3A,
+    /// Index into the scene's materials.
+    pub material: u32,
+}
+
+impl MeshInstance {
+    /// `mesh` rotated by `angle` radians about `axis` (through its origin), then moved by `translation`.
+    pub fn new(mesh: Arc<Mesh>, axis: Vec3, angle: f32, translation: Vec3, material: u32) -> Self {
+        let rotation = Mat3A::from_axis_angle(axis.normalize(), angle);
+        Self {
+            mesh,
+            rotation,
+            inverse: rotation.transpose(),
+            translation: translation.into(),
+            material,
+        }
+    }
+}
+
+/// A surface point found by a ray.
+#[derive(Clone, Copy, Debug)]
+pub struct Surface {
+    /// Position.
+    pub p: Vec3A,
+    /// Unit geometric normal (outward for closed shapes; `u x v` for quads).
+    pub n: Vec3A,
+    /// Texture coordinates (quads only; zero elsewhere).
+    pub uv: Vec2,
+    /// Index into the scene's materials.
+    pub material: u32,
+    /// Emitted radiance on the front side (zero for non-emitters).
+    pub emission: Vec3A,
+    /// Index into the scene's area lights, or [`NO_LIGHT`].
+    pub light: u32,
+}
+
+#[derive(Clone, Copy)]
+enum Prim {
+    Sphere(u32),
+    Quad(u32),
+    Box(u32),
+    SetBox(u32),
+    Tri(u32, u32),
+}
+
+/// Everything a ray can hit.
+#[derive(Default)]
+pub struct Geometry {
+    /// Spheres.
+    pub spheres: Vec<Sphere>,
+    /// Parallelograms (walls, floors, area lights).
+    pub quads: Vec<Quad>,
+    /// Rotated boxes, tested one by one (use a [`BoxSet`] for many).
+    pub boxes: Vec<OrientedBox>,
+    /// Many axis-aligned boxes behind a BVH.
+    pub box_set: Option<BoxSet>,
+    /// Placed meshes.
+    pub instances: Vec<MeshInstance>,
+}
+
+impl Geometry {
+    /// Closest surface along the unit-direction ray `o + t d`, `t` in (0, `tmax`).
+    #[inline]
+    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, Surface)> {
+        let mut best = tmax;
+        let mut prim = None;
+        for (i, s) in self.spheres.iter().enumerate() {
+            let t = s.intersect(o, d, best);
+            if t < best {
+                best = t;
+                prim = Some(Prim::Sphere(i as u32));
+            }
+        }
+        for (i, q) in self.quads.iter().enumerate() {
+            let t = q.intersect(o, d, best);
+            if t < best {
+                best = t;
+                prim = Some(Prim::Quad(i as u32));
+            }
+        }
+        for (i, b) in self.boxes.iter().enumerate() {
+            let t = b.intersect(o, d, best);
+            if t < best {
+                best = t;
+                prim = Some(Prim::Box(i as u32));
+            }
+        }
+        if let Some(set) = &self.box_set {
+            let ray = BvhRay::new(o, d, T_MIN, best);
+            let mut hit = RayHit::none();
+            let boxes = &set.boxes;
+            if set.bvh.ray_traverse(ray, &mut hit, |r, id| {
+                let b = &boxes[id];
+                slab(r.origin, r.inv_direction, b.min, b.max, r.tmax)
+            }) {
+                best = hit.t;
+                prim = Some(Prim::SetBox(hit.primitive_id));
+            }
+        }
+        for (k, inst) in self.instances.iter().enumerate() {
+            let lo = inst.inverse * (o - inst.translation);
+            let ld = inst.inverse * d;
+            if let Some((t, tri)) = inst.mesh.intersect(lo, ld, best) {
+                best = t;
+                prim = Some(Prim::Tri(k as u32, tri));
+            }
+        }
+        let prim = prim?;
+        let p = o + best * d;
+        let mut surface = Surface {
+            p,
+            n: Vec3A::Z,
+            uv: Vec2::ZERO,
+            material: 0,
+            emission: Vec3A::ZERO,
+            light: NO_LIGHT,
+        };
+        match prim {
+            Prim::Sphere(i) => {
+                let s = &self.spheres[i as usize];
+                surface.n = (p - s.center) / s.radius;
+                surface.material = s.material;
+            }
+            Prim::Quad(i) => {
+                let q = &self.quads[i as usize];
+                surface.n = q.normal;
+                surface.uv = q.uv(p);
+                surface.material = q.material;
+                if q.normal.dot(d) < 0.0 {
+                    surface.emission = q.emission;
+                }
+                surface.light = q.light;
+            }
+            Prim::Box(i) => {
+                let b = &self.boxes[i as usize];
+                surface.n = b.normal(p);
+                surface.material = b.material;
+            }
+            Prim::SetBox(i) => {
+                // `box_set` is Some whenever a SetBox was recorded.
+                if let Some(set) = &self.box_set {
+                    let b = &set.boxes[i as usize];
+                    let center = 0.5 * (b.min + b.max);
+                    surface.n = box_face_normal(p - center, 0.5 * (b.max - b.min));
+                    surface.material = b.material;
+                }
+            }
+            Prim::Tri(k, tri) => {
+                let inst = &self.instances[k as usize];
+                surface.n = (inst.rotation * inst.mesh.tris[tri as usize].compute_normal())
+                    .normalize_or(Vec3A::Z);
+                surface.material = inst.material;
+            }
+        }
+        Some((best, surface))
+    }
+
+    /// Whether any surface lies on the ray `o + t d` for `t` in (0, `tmax`) (shadow rays).
+    #[inline]
+    pub fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
+        if self.spheres.iter().any(|s| s.intersect(o, d, tmax) < tmax)
+            || self.quads.iter().any(|q| q.intersect(o, d, tmax) < tmax)
+            || self.boxes.iter().any(|b| b.intersect(o, d, tmax) < tmax)
+        {
+            return true;
+        }
+        if let Some(set) = &self.box_set {
+            let ray = BvhRay::new(o, d, T_MIN, tmax);
+            let boxes = &set.boxes;
+            let miss = set.bvh.ray_traverse_miss(ray, |r, id| {
+                let b = &boxes[id];
+                slab(r.origin, r.inv_direction, b.min, b.max, r.tmax)
+            });
+            if !miss {
+                return true;
+            }
+        }
+        self.instances.iter().any(|inst| {
+            let lo = inst.inverse * (o - inst.translation);
+            let ld = inst.inverse * d;
+            inst.mesh.occluded(lo, ld, tmax)
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sphere_hits_front_then_back_from_inside() {
+        let s = Sphere::new(Vec3::ZERO, 1.0, 0);
+        let t = s.intersect(Vec3A::new(0.0, 0.0, 5.0), Vec3A::NEG_Z, f32::INFINITY);
+        assert!((t - 4.0).abs() < 1e-5);
+        let t = s.intersect(Vec3A::ZERO, Vec3A::X, f32::INFINITY);
+        assert!((t - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn quad_bounds_and_uv() {
+        let q = Quad::new(Vec3::ZERO, Vec3::X * 2.0, Vec3::Y, 0);
+        let o = Vec3A::new(1.5, 0.25, 3.0);
+        let t = q.intersect(o, Vec3A::NEG_Z, f32::INFINITY);
+        assert!((t - 3.0).abs() < 1e-6);
+        let uv = q.uv(o + t * Vec3A::NEG_Z);
+        assert!((uv.x - 0.75).abs() < 1e-6 && (uv.y - 0.25).abs() < 1e-6);
+        let miss = q.intersect(Vec3A::new(2.5, 0.5, 3.0), Vec3A::NEG_Z, f32::INFINITY);
+        assert_eq!(miss, f32::INFINITY);
+    }
+
+    #[test]
+    fn rotated_box_and_box_set_agree_with_geometry() {
+        let b = OrientedBox::new(
+            Vec3::ZERO,
+            Vec3::splat(1.0),
+            Vec3::Y,
+            0.25 * std::f32::consts::PI,
+            0,
+        );
+        // Rotated 45 degrees about y: the corner sits at x = sqrt(2).
+        let t = b.intersect(Vec3A::new(5.0, 0.0, 0.0), Vec3A::NEG_X, f32::INFINITY);
+        assert!((t - (5.0 - 2f32.sqrt())).abs() < 1e-5, "{t}");
+        let set = BoxSet::new(&[
+            AaBox {
+                min: Vec3A::splat(-1.0),
+                max: Vec3A::splat(1.0),
+                material: 3,
+            },
+            AaBox {
+                min: Vec3A::new(3.0, -1.0, -1.0),
+                max: Vec3A::new(4.0, 1.0, 1.0),
+                material: 4,
+            },
+        ]);
+        let geo = Geometry {
+            box_set: Some(set),
+            ..Default::default()
+        };
+        let (t, s) = geo
+            .intersect(Vec3A::new(10.0, 0.0, 0.0), Vec3A::NEG_X, f32::INFINITY)
+            .expect("hit");
+        assert!((t - 6.0).abs() < 1e-5 && s.material == 4 && s.n.x > 0.99);
+        assert!(geo.occluded(Vec3A::new(10.0, 0.0, 0.0), Vec3A::NEG_X, 8.0));
+        assert!(!geo.occluded(Vec3A::new(10.0, 0.0, 0.0), Vec3A::NEG_X, 5.0));
+    }
+}

@@ -1,0 +1,139 @@
+//! GI: a Cornell box seen through an inset that shows neither the light nor the left wall;
+//! both are known only through the light they bounce onto what is visible.
+
+use std::f32::consts::FRAC_PI_2;
+
+use glam::{Vec3, Vec3A};
+
+use super::{param, unit_box, Defaults, Paper, Task, View};
+use crate::render::{Geometry, Lights, Material, OrientedBox, Quad, Scene};
+
+/// The GI task.
+pub struct Gi;
+
+impl Gi {
+    /// The task (analytic shapes only).
+    pub fn new() -> Self {
+        Gi
+    }
+}
+
+impl Task for Gi {
+    fn name(&self) -> &'static str {
+        "gi"
+    }
+
+    fn description(&self) -> &'static str {
+        "Recover a Cornell box's ceiling-light position (x, z), left-wall RGB reflectance and tall-box rotation from an inset view that shows neither the light nor the left wall."
+    }
+
+    fn dim(&self) -> usize {
+        6
+    }
+
+    fn defaults(&self) -> Defaults {
+        Defaults {
+            samples: 4,
+            sigma0: 0.125,
+            spp: 16,
+            lr: 0.05,
+            iterations: 500,
+        }
+    }
+
+    fn paper(&self) -> Option<Paper> {
+        Some(Paper {
+            image_mse: 5.07e-5,
+            param_mse: 8.71e-4,
+            seconds_per_iteration: 0.15,
+            mitsuba_image_mse: 3.78e-2,
+            mitsuba_param_mse: 3.87e-1,
+            sigma05: Some((1.0e-4, 6.6e-2)),
+        })
+    }
+
+    /// [light x, light z, left wall r, g, b, tall-box rotation].
+    fn start(&self) -> Vec<f64> {
+        vec![0.2, 0.8, 0.2, 0.5, 0.8, 0.7]
+    }
+
+    fn target(&self) -> Vec<f64> {
+        vec![0.5, 0.5, 0.8, 0.1, 0.1, 0.3]
+    }
+
+    fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        unit_box(6)
+    }
+
+    fn max_depth(&self) -> u32 {
+        6
+    }
+
+    fn scene(&self, theta: &[f64], view: View) -> Scene {
+        let eye = Vec3::new(0.35, 0.9, 3.2);
+        let camera = view.camera(
+            eye,
+            Vec3::new(0.3, 0.6, -0.3) - eye,
+            Vec3::Y,
+            28.0,
+            (128, 128),
+        );
+        let p = |i| param(theta, i);
+        let wall = |i| p(i).clamp(0.0, 1.0);
+        // Box [-1, 1] x [0, 2] x [-1, 1], open at +z.
+        let mut quads = vec![
+            Quad::centered(Vec3::ZERO, Vec3::Z * 2.0, Vec3::X * 2.0, 0),
+            Quad::centered(Vec3::new(0.0, 2.0, 0.0), Vec3::X * 2.0, Vec3::Z * 2.0, 0),
+            Quad::centered(Vec3::new(0.0, 1.0, -1.0), Vec3::X * 2.0, Vec3::Y * 2.0, 0),
+            Quad::centered(Vec3::new(-1.0, 1.0, 0.0), Vec3::Y * 2.0, Vec3::Z * 2.0, 1),
+            Quad::centered(Vec3::new(1.0, 1.0, 0.0), Vec3::Z * 2.0, Vec3::Y * 2.0, 2),
+        ];
+        let mut lights = Lights::default();
+        // Ceiling light, facing down (x x z = -y); theta_0, theta_1 span [-0.6, 0.6].
+        lights.add_area(
+            &mut quads,
+            Quad::centered(
+                Vec3::new(-0.6 + 1.2 * p(0), 1.995, -0.6 + 1.2 * p(1)),
+                Vec3::X * 0.7,
+                Vec3::Z * 0.7,
+                3,
+            ),
+            Vec3::splat(9.0),
+        );
+        Scene {
+            camera,
+            geometry: Geometry {
+                quads,
+                boxes: vec![
+                    // Tall box: theta_5 in [0, 1] is a quarter turn (the box's symmetry period).
+                    OrientedBox::new(
+                        Vec3::new(-0.35, 0.6, -0.35),
+                        Vec3::new(0.3, 0.6, 0.3),
+                        Vec3::Y,
+                        FRAC_PI_2 * p(5),
+                        0,
+                    ),
+                    OrientedBox::new(
+                        Vec3::new(0.4, 0.3, 0.35),
+                        Vec3::splat(0.3),
+                        Vec3::Y,
+                        -0.3,
+                        0,
+                    ),
+                ],
+                ..Default::default()
+            },
+            materials: vec![
+                Material::diffuse(0.75, 0.75, 0.75),
+                Material::Diffuse {
+                    albedo: Vec3A::new(wall(2), wall(3), wall(4)),
+                    texture: None,
+                },
+                Material::diffuse(0.15, 0.6, 0.15),
+                Material::diffuse(0.0, 0.0, 0.0),
+            ],
+            textures: vec![],
+            lights,
+        }
+    }
+}

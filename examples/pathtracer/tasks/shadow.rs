@@ -1,0 +1,108 @@
+//! SHADOW: move a sphere that the camera cannot see so that its shadow lands right.
+//!
+//! The scene is the authors' (SPEC section 2), in world units.
+
+use glam::{Vec3, Vec3A};
+
+use super::{param, Defaults, Paper, Task, View};
+use crate::render::{Geometry, Lights, Material, PointLight, Quad, Scene, Sphere};
+
+/// The SHADOW task.
+pub struct Shadow;
+
+impl Shadow {
+    /// The task (nothing to precompute: two analytic shapes).
+    pub fn new() -> Self {
+        Shadow
+    }
+}
+
+impl Task for Shadow {
+    fn name(&self) -> &'static str {
+        "shadow"
+    }
+
+    fn description(&self) -> &'static str {
+        "Move an out-of-view sphere (y, z offsets, world units) so that its shadow on a wall matches the reference."
+    }
+
+    fn dim(&self) -> usize {
+        2
+    }
+
+    fn defaults(&self) -> Defaults {
+        Defaults {
+            samples: 2,
+            sigma0: 0.5,
+            spp: 32,
+            lr: 0.02,
+            iterations: 400,
+        }
+    }
+
+    fn paper(&self) -> Option<Paper> {
+        Some(Paper {
+            image_mse: 1.74e-5,
+            param_mse: 1.81e-3,
+            seconds_per_iteration: 0.04,
+            mitsuba_image_mse: 1.64e-3,
+            mitsuba_param_mse: 5.06,
+            sigma05: None,
+        })
+    }
+
+    fn start(&self) -> Vec<f64> {
+        vec![-0.5, 2.5]
+    }
+
+    fn target(&self) -> Vec<f64> {
+        vec![-1.5, 1.0]
+    }
+
+    fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        None
+    }
+
+    fn max_depth(&self) -> u32 {
+        6
+    }
+
+    fn scene(&self, theta: &[f64], view: View) -> Scene {
+        let camera = view.camera(
+            Vec3::new(17.658, 0.0, 0.0),
+            Vec3::NEG_X,
+            Vec3::Z,
+            39.597755,
+            (256, 192),
+        );
+        let center = Vec3::new(13.57, 8.05 + param(theta, 0), -2.0 + param(theta, 1));
+        Scene {
+            camera,
+            geometry: Geometry {
+                // y x z = +x: the wall faces the camera.
+                quads: vec![Quad::centered(
+                    Vec3::ZERO,
+                    Vec3::Y * 13.16,
+                    Vec3::Z * 13.16,
+                    0,
+                )],
+                spheres: vec![Sphere::new(center, 0.5, 1)],
+                ..Default::default()
+            },
+            materials: vec![
+                Material::diffuse(0.7, 0.7, 0.7),
+                Material::diffuse(0.8, 0.262, 0.0415),
+            ],
+            textures: vec![],
+            lights: Lights {
+                points: vec![PointLight::new(
+                    Vec3::new(25.975, 13.776, 0.0),
+                    Vec3::splat(1715.0),
+                )],
+                environment: Vec3A::new(0.6, 0.6, 0.99),
+                environment_nee: false,
+                ..Default::default()
+            },
+        }
+    }
+}

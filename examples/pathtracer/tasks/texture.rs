@@ -1,0 +1,135 @@
+//! TEXTURE (supplemental Sec. 3): recover a 128 x 128 RGB texture (49,152 parameters) seen
+//! on a plane under a constant sky, from a flat grey start. Plateau-free by design: it shows
+//! the estimator at a very high dimension.
+
+use std::f64::consts::TAU;
+
+use glam::{Vec3, Vec3A};
+
+use super::{Defaults, Paper, Task, View};
+use crate::render::{Geometry, Lights, Material, Quad, Scene, Texture};
+
+/// Texture side, in texels.
+pub const SIDE: u32 = 128;
+
+/// The TEXTURE task.
+pub struct TextureTask;
+
+impl TextureTask {
+    /// The task.
+    pub fn new() -> Self {
+        TextureTask
+    }
+}
+
+/// The reference texture at (u, v) in [0, 1]^2: diagonal colour waves, a checkerboard and
+/// concentric rings, so every channel has edges and gradients at several scales.
+fn reference(u: f64, v: f64) -> [f64; 3] {
+    let waves = 0.5 + 0.5 * (TAU * (2.0 * u + v)).sin();
+    let checker = if ((8.0 * u) as i32 + (8.0 * v) as i32) % 2 == 0 {
+        0.85
+    } else {
+        0.15
+    };
+    let r = ((u - 0.5).powi(2) + (v - 0.5).powi(2)).sqrt();
+    let rings = 0.5 + 0.5 * (TAU * 5.0 * r).cos();
+    [
+        0.1 + 0.8 * waves,
+        0.5 * checker + 0.4 * rings,
+        0.9 - 0.7 * waves * rings,
+    ]
+}
+
+impl Task for TextureTask {
+    fn name(&self) -> &'static str {
+        "texture"
+    }
+
+    fn description(&self) -> &'static str {
+        "Recover a 128x128 RGB texture (49,152 parameters in [0,1]) on a plane under constant sky light, from flat grey."
+    }
+
+    fn dim(&self) -> usize {
+        (3 * SIDE * SIDE) as usize
+    }
+
+    /// Our choice (the paper gives none), see docs/tasks.md.
+    fn defaults(&self) -> Defaults {
+        Defaults {
+            samples: 8,
+            sigma0: 0.1,
+            spp: 4,
+            lr: 0.01,
+            iterations: 2000,
+        }
+    }
+
+    fn paper(&self) -> Option<Paper> {
+        None
+    }
+
+    fn start(&self) -> Vec<f64> {
+        vec![0.5; self.dim()]
+    }
+
+    /// Texel (i, j) sampled at its centre, rows top to bottom, RGB interleaved.
+    fn target(&self) -> Vec<f64> {
+        let n = SIDE as f64;
+        let mut theta = Vec::with_capacity(self.dim());
+        for j in 0..SIDE {
+            for i in 0..SIDE {
+                theta.extend(reference((i as f64 + 0.5) / n, (j as f64 + 0.5) / n));
+            }
+        }
+        theta
+    }
+
+    fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        super::unit_box(self.dim())
+    }
+
+    fn max_depth(&self) -> u32 {
+        2
+    }
+
+    fn scene(&self, theta: &[f64], view: View) -> Scene {
+        // The plane [-1, 1]^2 at z = 0 exactly fills a 128 x 128 view: a texel per pixel.
+        let distance = 10.0f32;
+        let fov = 2.0 * (1.0 / distance as f64).atan().to_degrees();
+        let camera = view.camera(
+            Vec3::new(0.0, 0.0, distance),
+            Vec3::NEG_Z,
+            Vec3::Y,
+            fov,
+            (SIDE, SIDE),
+        );
+        let texture = if theta.len() == self.dim() {
+            Texture::from_rgb(SIDE, SIDE, theta)
+        } else {
+            Texture::from_rgb(1, 1, &[0.0, 0.0, 0.0])
+        };
+        Scene {
+            camera,
+            geometry: Geometry {
+                // Corner top-left, u to the right, v down: uv = (column, row) fractions.
+                quads: vec![Quad::new(
+                    Vec3::new(-1.0, 1.0, 0.0),
+                    Vec3::X * 2.0,
+                    Vec3::NEG_Y * 2.0,
+                    0,
+                )],
+                ..Default::default()
+            },
+            materials: vec![Material::Diffuse {
+                albedo: Vec3A::ONE,
+                texture: Some(0),
+            }],
+            textures: vec![texture],
+            lights: Lights {
+                environment: Vec3A::splat(1.0),
+                environment_nee: false,
+                ..Default::default()
+            },
+        }
+    }
+}
