@@ -350,11 +350,16 @@ fn fmt_num(x: f64) -> String {
     }
 }
 
+/// A relative size as a percentage with two significant digits (`x` above 10 as a number).
 fn pct(x: f64) -> String {
     if x >= 10.0 {
         format!("{x:.1e}")
-    } else {
+    } else if x >= 0.1 {
+        format!("{:.0} %", 100.0 * x)
+    } else if x >= 0.01 {
         format!("{:.1} %", 100.0 * x)
+    } else {
+        format!("{:.2} %", 100.0 * x)
     }
 }
 
@@ -621,8 +626,8 @@ fn summary(page: &mut String, configs: &[Config], names: &[&str], results: &[Vec
     writeln!(
         page,
         "**Bias in units of its noise floor**, antithetic, N = 8: per-coordinate [its \
-         relative bias] vs radial. About 1 (up to 2 or so) is what an unbiased estimator \
-         shows.\n"
+         relative bias] vs radial. An unbiased estimator shows about 1, rarely above \
+         3.\n"
     )
     .unwrap();
     write!(page, "| function |").unwrap();
