@@ -1,24 +1,35 @@
-//! Path-tracing examples of plateau: the paper's seven inverse-rendering tasks.
+//! The paper's inverse-rendering tasks, solved with the plateau-free gradient on a small CPU
+//! path tracer.
 //!
-//! `render` draws one task at given parameters; the optimisation front-ends come later.
+//! ```text
+//! cargo run --release --example pathtracer -- optimize shadow          # one task end to end
+//! cargo run --release --example pathtracer -- render cup --target --out cup.png
+//! cargo run --release --example pathtracer -- all                      # every task + baseline
+//! ```
 
-// The renderer and the tasks are this example's internal library: each front-end (render,
-// optimize, the benches, the tests) uses a different part of their public surface.
+mod experiments;
+// The renderer and the tasks are this example's internal library: each front-end (the
+// commands, the benches, the tests) uses a different part of their surface.
 #[allow(dead_code)]
 mod render;
+mod report;
+mod run;
 #[allow(dead_code)]
 mod tasks;
 
-use std::path::PathBuf;
-use std::process::ExitCode;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 
-use tasks::View;
+use report::Result;
+use run::{Crn, Method, SamplerArg, Settings};
+use tasks::{Task, View};
 
 #[derive(Parser)]
-#[command(about = "Inverse path tracing with plateau-free gradients")]
+#[command(
+    about = "Plateau-free differentiable path tracing: the paper's tasks on a CPU path tracer"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -26,42 +37,202 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render one task at its start, its target (default) or given parameters.
-    Render {
+    /// Render the reference, optimise from the start, write images, plot, CSV and summary.
+    Optimize {
         /// cup, shadow, occlusion, gi, sort, caustic or texture.
         task: String,
-        /// Render at the optimisation's start.
+        #[command(flatten)]
+        opts: RunOptions,
+        /// Output directory (default out/<task>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Render one image at the target (default), the start or given parameters, and print
+    /// `render_seconds: X` (the render alone, scene set-up excluded).
+    Render {
+        task: String,
+        /// The start parameters.
         #[arg(long, conflicts_with_all = ["target", "params"])]
         initial: bool,
-        /// Render at the target (the default).
+        /// The target parameters (the default).
         #[arg(long, conflicts_with = "params")]
         target: bool,
-        /// Comma-separated parameters.
+        /// Explicit parameters, comma-separated.
         #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
         params: Option<Vec<f64>>,
         /// Samples per pixel (default: the task's).
         #[arg(long)]
         spp: Option<u32>,
-        /// Random seed of the render.
         #[arg(long, default_value_t = 0)]
         seed: u64,
-        /// Resolution multiplier.
-        #[arg(long)]
-        scale: Option<f64>,
         /// Horizontal field of view in degrees (default: the task's).
         #[arg(long)]
         fov: Option<f64>,
-        /// Render this many times and report the median time (the image is the last one).
+        /// Resolution multiplier.
+        #[arg(long)]
+        scale: Option<f64>,
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Render this many times and print the median time (the image is the last one).
         #[arg(long, default_value_t = 1)]
         repeat: usize,
-        /// Output image, .png (sRGB) or .exr (linear).
+        /// A .png (sRGB) or .exr (linear) file.
         #[arg(long)]
         out: PathBuf,
     },
+    /// Every task with the plateau-free gradient and the finite-difference baseline, then
+    /// results.md: our numbers beside the paper's.
+    All {
+        /// Output directory (default out/).
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+        /// A few minutes in all: a tenth of the iterations at half resolution.
+        #[arg(long)]
+        quick: bool,
+        /// Only these tasks (comma-separated).
+        #[arg(long, value_delimiter = ',')]
+        tasks: Option<Vec<String>>,
+        #[arg(long)]
+        threads: Option<usize>,
+    },
+    /// One of the supplemental's experiments or the speed/accuracy study: CSV, plots and a
+    /// markdown page in the output directory.
+    Experiment {
+        #[arg(value_enum)]
+        name: experiments::Experiment,
+        /// Minutes instead of hours (fewer iterations, seeds and points; lower resolution).
+        #[arg(long)]
+        quick: bool,
+        /// Output directory.
+        #[arg(long, default_value = "docs/results")]
+        out: PathBuf,
+        /// Only these tasks, for the experiments over every task (comma-separated).
+        #[arg(long, value_delimiter = ',')]
+        tasks: Option<Vec<String>>,
+        #[arg(long)]
+        threads: Option<usize>,
+    },
 }
 
-fn main() -> ExitCode {
-    match Cli::parse().command {
+/// Overrides of a task's defaults (supplemental Table 1).
+#[derive(Args, Clone, Debug, Default)]
+struct RunOptions {
+    #[arg(long)]
+    iterations: Option<usize>,
+    /// N: evaluations of the objective per gradient.
+    #[arg(long)]
+    samples: Option<usize>,
+    #[arg(long)]
+    sigma0: Option<f64>,
+    #[arg(long)]
+    lr: Option<f64>,
+    #[arg(long)]
+    spp: Option<u32>,
+    #[arg(long, value_enum)]
+    sampling: Option<SamplerArg>,
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Horizontal field of view in degrees.
+    #[arg(long)]
+    fov: Option<f64>,
+    /// Resolution multiplier (0.5 renders a quarter of the pixels).
+    #[arg(long)]
+    scale: Option<f64>,
+    /// Worker threads for rendering (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Ablation: no antithetic pairs.
+    #[arg(long)]
+    no_antithetic: bool,
+    /// Ablation: constant sigma.
+    #[arg(long)]
+    no_anneal: bool,
+    /// plateau (default), fd or spsa.
+    #[arg(long, value_enum)]
+    method: Option<Method>,
+    /// Renderer seeds: fixed (every render uses the run's seed, as the paper's code) or pair.
+    #[arg(long, value_enum)]
+    crn: Option<Crn>,
+    /// Finite-difference step (normalised units).
+    #[arg(long)]
+    fd_step: Option<f64>,
+    /// Render the current parameters for the image-error curve every this many iterations.
+    #[arg(long)]
+    eval_every: Option<usize>,
+    /// A time budget in seconds: picks resolution, spp (and if need be iterations) to fit,
+    /// from the measured cost model, and stops when the budget is spent.
+    #[arg(long)]
+    budget: Option<f64>,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+impl RunOptions {
+    fn settings(&self, task: &dyn Task) -> Settings {
+        let mut s = Settings::defaults(task);
+        let o = self;
+        s.iterations = o.iterations.unwrap_or(s.iterations);
+        s.samples = o.samples.unwrap_or(s.samples);
+        s.sigma0 = o.sigma0.unwrap_or(s.sigma0);
+        s.lr = o.lr.unwrap_or(s.lr);
+        s.spp = o.spp.unwrap_or(s.spp);
+        s.sampling = o.sampling.unwrap_or(s.sampling);
+        s.seed = o.seed.unwrap_or(s.seed);
+        s.fov_degrees = o.fov;
+        s.scale = o.scale;
+        s.antithetic = !o.no_antithetic;
+        s.anneal = !o.no_anneal;
+        s.method = o.method.unwrap_or(s.method);
+        s.crn = o.crn.unwrap_or(s.crn);
+        s.fd_step = o.fd_step.unwrap_or(s.fd_step);
+        s.eval_every = o.eval_every.unwrap_or((s.iterations / 100).max(1));
+        s.budget_seconds = o.budget;
+        s
+    }
+}
+
+fn main() {
+    if let Err(e) = run_cli(Cli::parse()) {
+        eprintln!("error: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn run_cli(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Optimize { task, opts, out } => {
+            let task = find_task(&task)?;
+            with_threads(opts.threads, || {
+                let mut settings = opts.settings(task.as_ref());
+                if let Some(budget) = opts.budget {
+                    if !(budget.is_finite() && budget > 0.0) {
+                        return Err(format!(
+                            "--budget must be a positive number of seconds, got {budget}"
+                        )
+                        .into());
+                    }
+                    let (plan, why) = run::plan_for_budget(task.as_ref(), &settings, budget);
+                    eprintln!("{why}");
+                    settings = plan;
+                }
+                let dir = out.unwrap_or_else(|| Path::new("out").join(task.name()));
+                let outcome = run::optimize(task.as_ref(), &settings, Some(&dir), !opts.quiet)?;
+                let s = &outcome.summary;
+                println!(
+                    "{}: param MSE {:.3e} -> {:.3e}, image MSE {:.3e} -> {:.3e}, {:.3} s/iteration ({} iterations), outputs in {}",
+                    s.task,
+                    s.initial_param_mse,
+                    s.param_mse,
+                    s.initial_image_mse,
+                    s.image_mse,
+                    s.seconds_per_iteration,
+                    s.iterations,
+                    dir.display()
+                );
+                Ok(())
+            })
+        }
         Command::Render {
             task,
             initial,
@@ -69,50 +240,185 @@ fn main() -> ExitCode {
             params,
             spp,
             seed,
-            scale,
             fov,
+            scale,
+            threads,
             repeat,
             out,
         } => {
-            let Some(task) = tasks::by_name(&task) else {
-                eprintln!("unknown task {task:?}");
-                return ExitCode::FAILURE;
-            };
+            let task = find_task(&task)?;
             let theta = match params {
-                Some(p) if p.len() != task.dim() => {
-                    eprintln!(
-                        "{} takes {} parameters, got {}",
-                        task.name(),
-                        task.dim(),
-                        p.len()
-                    );
-                    return ExitCode::FAILURE;
-                }
                 Some(p) => p,
                 None if initial => task.start(),
                 None => task.target(),
             };
-            let view = View {
-                fov_degrees: fov,
-                scale,
-            };
-            let spp = spp.unwrap_or(task.defaults().spp);
-            let mut times = Vec::new();
-            let mut image = None;
-            for _ in 0..repeat.max(1) {
-                let t0 = Instant::now();
-                image = Some(task.render(&theta, seed, spp, view));
-                times.push(t0.elapsed().as_secs_f64());
+            if theta.len() != task.dim() {
+                return Err(format!(
+                    "{} takes {} parameters, got {}",
+                    task.name(),
+                    task.dim(),
+                    theta.len()
+                )
+                .into());
             }
-            times.sort_by(f64::total_cmp);
-            println!("render_seconds: {:.6}", times[times.len() / 2]);
-            if let Some(image) = image {
-                if let Err(e) = image.save(&out) {
-                    eprintln!("{e}");
-                    return ExitCode::FAILURE;
+            if let Some(i) = theta.iter().position(|x| !x.is_finite()) {
+                return Err(format!("parameter {i} is {}", theta[i]).into());
+            }
+            with_threads(threads, || {
+                let spp = spp.unwrap_or(task.defaults().spp);
+                let scene = task.scene(
+                    &theta,
+                    View {
+                        fov_degrees: fov,
+                        scale,
+                    },
+                );
+                let settings = render::Settings::new(spp, seed, task.max_depth());
+                let mut times = Vec::new();
+                let mut image = None;
+                for _ in 0..repeat.max(1) {
+                    let t = Instant::now();
+                    image = Some(render::render(&scene, &settings));
+                    times.push(t.elapsed().as_secs_f64());
                 }
-            }
-            ExitCode::SUCCESS
+                times.sort_by(f64::total_cmp);
+                println!("render_seconds: {:.6}", times[times.len() / 2]);
+                if let Some(image) = image {
+                    image.save(&out)?;
+                }
+                Ok(())
+            })
         }
+        Command::All {
+            out,
+            quick,
+            tasks,
+            threads,
+        } => with_threads(threads, || all(&out, quick, tasks.as_deref())),
+        Command::Experiment {
+            name,
+            quick,
+            out,
+            tasks,
+            threads,
+        } => with_threads(threads, || {
+            experiments::run(name, &experiments::Options { quick, out, tasks })
+        }),
     }
+}
+
+fn find_task(name: &str) -> Result<Box<dyn Task>> {
+    tasks::by_name(name).ok_or_else(|| {
+        let names: Vec<_> = tasks::all().iter().map(|t| t.name()).collect();
+        format!("unknown task {name:?}; the tasks are {}", names.join(", ")).into()
+    })
+}
+
+/// Runs `f` on a rayon pool of `threads` workers (the global pool if `None`).
+fn with_threads<T>(threads: Option<usize>, f: impl FnOnce() -> Result<T> + Send) -> Result<T>
+where
+    T: Send,
+{
+    match threads {
+        None => f(),
+        Some(0) => Err("--threads must be at least 1".into()),
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()?
+            .install(f),
+    }
+}
+
+/// Every task with the plateau-free gradient and, where it is affordable, the finite-difference
+/// baseline; then `results.md`.
+fn all(out: &Path, quick: bool, only: Option<&[String]>) -> Result<()> {
+    let mut rows = Vec::new();
+    for task in tasks::all() {
+        if only.is_some_and(|names| !names.iter().any(|n| n == task.name())) {
+            continue;
+        }
+        let mut plateau = Settings::defaults(task.as_ref());
+        if quick {
+            plateau.iterations = (plateau.iterations / 10).max(20);
+            plateau.eval_every = (plateau.iterations / 20).max(1);
+            plateau.scale = Some(0.5);
+        }
+        let ours = run::optimize(task.as_ref(), &plateau, Some(&out.join(task.name())), true)?;
+        // Central differences cost 2n renders per iteration: affordable for the
+        // low-dimensional tasks only (SORT would need 300 renders an iteration).
+        let fd = if task.dim() <= 8 {
+            let mut fd = plateau.clone();
+            fd.method = Method::Fd;
+            Some(run::optimize(
+                task.as_ref(),
+                &fd,
+                Some(&out.join(format!("{}-fd", task.name()))),
+                true,
+            )?)
+        } else {
+            None
+        };
+        let s = &ours.summary;
+        println!(
+            "{:>10}: param MSE {:.3e}, image MSE {:.3e}, {:.3} s/iteration",
+            s.task, s.param_mse, s.image_mse, s.seconds_per_iteration
+        );
+        rows.push(results_row(task.as_ref(), &ours, fd.as_ref()));
+    }
+    let header = [
+        "task",
+        "N",
+        "sigma0",
+        "spp",
+        "iters",
+        "ours img MSE",
+        "ours param MSE",
+        "paper img MSE",
+        "paper param MSE",
+        "at or below paper param MSE",
+        "FD img MSE",
+        "FD param MSE",
+        "Mitsuba 3 param MSE (paper)",
+        "ours s/iter (CPU)",
+        "paper s/iter (GPU)",
+    ];
+    let mut md = String::from("# Results: the paper's tasks\n\n");
+    md.push_str(&format!(
+        "Produced by `cargo run --release --example pathtracer -- all{}`. \"ours\" is the plateau-free gradient at the paper's hyperparameters (supplemental Table 1); FD is a central finite difference (step 1e-3) on the same renderer, loop and settings (run only where its 2n renders per iteration are affordable). Paper numbers: main paper Tables 2 and 3.\n\n",
+        if quick { " --quick" } else { "" }
+    ));
+    md.push_str(&report::markdown_table(&header, &rows));
+    std::fs::create_dir_all(out)?;
+    std::fs::write(out.join("results.md"), md)?;
+    println!("wrote {}", out.join("results.md").display());
+    Ok(())
+}
+
+fn results_row(task: &dyn Task, ours: &run::Outcome, fd: Option<&run::Outcome>) -> Vec<String> {
+    let s = &ours.summary;
+    let paper = task.paper();
+    let cell = |v: Option<f64>| v.map_or("-".to_string(), report::sci);
+    vec![
+        task.name().to_uppercase(),
+        s.samples.to_string(),
+        s.sigma0.to_string(),
+        s.spp.to_string(),
+        s.iterations.to_string(),
+        report::sci(s.image_mse),
+        report::sci(s.param_mse),
+        cell(paper.map(|p| p.image_mse)),
+        cell(paper.map(|p| p.param_mse)),
+        paper.map_or("-".into(), |p| {
+            if s.param_mse <= p.param_mse {
+                "yes".into()
+            } else {
+                "no".into()
+            }
+        }),
+        cell(fd.map(|f| f.summary.image_mse)),
+        cell(fd.map(|f| f.summary.param_mse)),
+        cell(paper.map(|p| p.mitsuba_param_mse)),
+        format!("{:.3}", s.seconds_per_iteration),
+        paper.map_or("-".into(), |p| format!("{:.2}", p.seconds_per_iteration)),
+    ]
 }

@@ -1,0 +1,906 @@
+//! The supplemental's experiments and the speed/accuracy study, one command each:
+//! `cargo run --release --example pathtracer -- experiment <name> [--quick]`.
+//!
+//! Every experiment writes `<out>/<name>.csv` (the raw runs), one or more plots and
+//! `<out>/<name>.md` (a table and what it shows) with the command that made it.
+
+use std::fmt::Write as _;
+use std::fs;
+
+use plateau::{PlateauFreeGradient, Seeded};
+
+use crate::report::{self, sci, Axes, Result, Scale, Series};
+use crate::run::{self, Outcome, SamplerArg, Settings};
+use crate::tasks::{self, Task};
+
+/// The experiments, by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Experiment {
+    /// Supplemental Fig. 1: seconds per iteration against N on SHADOW.
+    Fig1,
+    /// Supplemental Fig. 2: parameter MSE against iteration for N = 2, 4, 8, 16 on SHADOW.
+    Fig2,
+    /// Supplemental Fig. 3: final error against sigma0 on SHADOW at 40 and 60 degrees.
+    Fig3,
+    /// Supplemental Table 2: CUP, OCCLUSION, GI, CAUSTIC at sigma0 = 0.5.
+    Table2,
+    /// Supplemental Fig. 4: TEXTURE convergence.
+    Fig4,
+    /// Main paper Table 4: the ablations on every task.
+    Ablation,
+    /// Radial against per-coordinate against Gaussian on every task.
+    Samplers,
+    /// The speed/accuracy trade on SHADOW and GI: N, spp, resolution, sampler.
+    Tradeoff,
+    /// Relative error of one gradient estimate against N and spp on SHADOW.
+    GradientQuality,
+}
+
+/// A named change of a task's default settings.
+type Variant = (&'static str, fn(&mut Settings));
+
+/// Options shared by every experiment.
+pub struct Options {
+    /// Minutes instead of hours: fewer iterations, seeds and points, lower resolution.
+    pub quick: bool,
+    /// Where the files go.
+    pub out: std::path::PathBuf,
+    /// Only these tasks (for the experiments that run every task).
+    pub tasks: Option<Vec<String>>,
+}
+
+impl Options {
+    fn seeds(&self, full: u64) -> Vec<u64> {
+        (1..=if self.quick { 1 } else { full }).collect()
+    }
+
+    /// Scales a run down for `--quick`: a tenth of the iterations (at least `min`), half the
+    /// resolution.
+    fn shrink(&self, s: &mut Settings, min: usize) {
+        if self.quick {
+            s.iterations = (s.iterations / 10).max(min);
+            s.scale = Some(s.scale.unwrap_or(1.0) * 0.5);
+        }
+        s.eval_every = (s.iterations / 50).max(1);
+    }
+
+    fn command(&self, name: &str) -> String {
+        format!(
+            "cargo run --release --example pathtracer -- experiment {name}{} --out {}",
+            if self.quick { " --quick" } else { "" },
+            self.out.display()
+        )
+    }
+
+    fn wants(&self, task: &dyn Task) -> bool {
+        self.tasks
+            .as_ref()
+            .is_none_or(|names| names.iter().any(|n| n == task.name()))
+    }
+}
+
+/// Runs one experiment.
+pub fn run(experiment: Experiment, opts: &Options) -> Result<()> {
+    fs::create_dir_all(&opts.out)?;
+    match experiment {
+        Experiment::Fig1 => fig1(opts),
+        Experiment::Fig2 => fig2(opts),
+        Experiment::Fig3 => fig3(opts),
+        Experiment::Table2 => table2(opts),
+        Experiment::Fig4 => fig4(opts),
+        Experiment::Ablation => ablation(opts),
+        Experiment::Samplers => samplers(opts),
+        Experiment::Tradeoff => tradeoff(opts),
+        Experiment::GradientQuality => gradient_quality(opts),
+    }
+}
+
+fn task(name: &str) -> Result<Box<dyn Task>> {
+    tasks::by_name(name).ok_or_else(|| format!("no task {name}").into())
+}
+
+fn quiet(task: &dyn Task, s: &Settings) -> Result<Outcome> {
+    let outcome = run::optimize(task, s, None, false)?;
+    let m = &outcome.summary;
+    eprintln!(
+        "  {:>9} {:<32} N={:<2} spp={:<3} sigma0={:<5} seed={} -> param MSE {:.3e}, image MSE {:.3e}, {:.4} s/it",
+        m.task,
+        s.label(),
+        s.samples,
+        s.spp,
+        s.sigma0,
+        s.seed,
+        m.param_mse,
+        m.image_mse,
+        m.seconds_per_iteration
+    );
+    Ok(outcome)
+}
+
+/// Median, minimum and maximum.
+fn spread(values: &[f64]) -> (f64, f64, f64) {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return (f64::NAN, f64::NAN, f64::NAN);
+    }
+    v.sort_by(f64::total_cmp);
+    let mid = v.len() / 2;
+    let median = if v.len() % 2 == 1 {
+        v[mid]
+    } else {
+        0.5 * (v[mid - 1] + v[mid])
+    };
+    (median, v[0], v[v.len() - 1])
+}
+
+/// Least squares `y = a + b x`.
+fn fit_line(points: &[(f64, f64)]) -> (f64, f64) {
+    let n = points.len() as f64;
+    let (sx, sy) = points
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
+    let (mx, my) = (sx / n, sy / n);
+    let sxx: f64 = points.iter().map(|(x, _)| (x - mx) * (x - mx)).sum();
+    let sxy: f64 = points.iter().map(|(x, y)| (x - mx) * (y - my)).sum();
+    let b = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    (my - b * mx, b)
+}
+
+fn write_page(opts: &Options, name: &str, title: &str, body: &str) -> Result<()> {
+    let text = format!(
+        "# {title}\n\nProduced by `{}`.\n\n{body}",
+        opts.command(name)
+    );
+    fs::write(opts.out.join(format!("{name}.md")), text)?;
+    eprintln!("wrote {}", opts.out.join(format!("{name}.md")).display());
+    Ok(())
+}
+
+fn summary_csv_row(o: &Outcome, extra: &[String]) -> Vec<String> {
+    let m = &o.summary;
+    let mut row = extra.to_vec();
+    row.extend([
+        m.task.clone(),
+        format!("{:?}", m.method).to_lowercase(),
+        format!("{:?}", m.sampling).to_lowercase(),
+        m.antithetic.to_string(),
+        m.anneal.to_string(),
+        m.samples.to_string(),
+        m.spp.to_string(),
+        m.sigma0.to_string(),
+        m.seed.to_string(),
+        m.width.to_string(),
+        m.height.to_string(),
+        m.iterations.to_string(),
+        format!("{:e}", m.param_mse),
+        format!("{:e}", m.image_mse),
+        format!("{:.6}", m.seconds_per_iteration),
+        format!("{:.6}", m.render_seconds_per_iteration),
+        format!("{:.3e}", m.overhead_seconds_per_iteration),
+        format!("{:.3}", m.seconds_total),
+    ]);
+    row
+}
+
+const SUMMARY_COLUMNS: [&str; 18] = [
+    "task",
+    "method",
+    "sampling",
+    "antithetic",
+    "anneal",
+    "samples",
+    "spp",
+    "sigma0",
+    "seed",
+    "width",
+    "height",
+    "iterations",
+    "param_mse",
+    "image_mse",
+    "seconds_per_iteration",
+    "render_seconds_per_iteration",
+    "overhead_seconds_per_iteration",
+    "seconds_total",
+];
+
+fn header<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+    extra.iter().copied().chain(SUMMARY_COLUMNS).collect()
+}
+
+// ---------------------------------------------------------------------------------------
+// Fig. 1: runtime against N.
+
+fn fig1(opts: &Options) -> Result<()> {
+    let shadow = task("shadow")?;
+    let ns: Vec<usize> = if opts.quick {
+        vec![2, 4, 8]
+    } else {
+        vec![2, 4, 6, 8, 10, 12, 14, 16]
+    };
+    let mut runs = Vec::new();
+    for &n in &ns {
+        let mut s = Settings::defaults(shadow.as_ref());
+        s.samples = n;
+        s.iterations = if opts.quick { 4 } else { 20 };
+        s.eval_every = usize::MAX;
+        if opts.quick {
+            s.scale = Some(0.5);
+        }
+        runs.push((n, quiet(shadow.as_ref(), &s)?));
+    }
+    let total: Vec<(f64, f64)> = runs
+        .iter()
+        .map(|(n, o)| (*n as f64, o.summary.seconds_per_iteration))
+        .collect();
+    let overhead: Vec<(f64, f64)> = runs
+        .iter()
+        .map(|(n, o)| (*n as f64, o.summary.overhead_seconds_per_iteration))
+        .collect();
+    let (a, b) = fit_line(&total);
+    let fitted: Vec<(f64, f64)> = ns.iter().map(|&n| (n as f64, a + b * n as f64)).collect();
+    report::write_csv(
+        &opts.out.join("fig1.csv"),
+        &header(&["N"]),
+        runs.iter()
+            .map(|(n, o)| summary_csv_row(o, &[n.to_string()])),
+    )?;
+    report::plot(
+        &opts.out.join("fig1.png"),
+        &Axes {
+            title: "SHADOW: seconds per iteration against N",
+            x_label: "N (evaluations per gradient)",
+            y_label: "seconds per iteration",
+            x_scale: Scale::Linear,
+            y_scale: Scale::Log,
+        },
+        &[
+            Series::markers("measured (render + estimator + Adam)", total.clone()),
+            Series::line(format!("fit {a:.4} + {b:.4} N"), fitted),
+            Series::markers("estimator + Adam alone", overhead.clone()),
+        ],
+    )?;
+    let rows: Vec<Vec<String>> = runs
+        .iter()
+        .map(|(n, o)| {
+            let m = &o.summary;
+            vec![
+                n.to_string(),
+                format!("{:.4}", m.seconds_per_iteration),
+                format!("{:.4}", m.render_seconds_per_iteration),
+                format!("{:.2e}", m.overhead_seconds_per_iteration),
+                format!(
+                    "{:.4} %",
+                    100.0 * m.overhead_seconds_per_iteration / m.seconds_per_iteration
+                ),
+            ]
+        })
+        .collect();
+    let s0 = &runs[0].1.summary;
+    let mut body = format!(
+        "SHADOW at {}x{}, {} spp, depth 6; {} iterations per point, timed on this machine's cores.\n\n![fig1](fig1.png)\n\n",
+        s0.width, s0.height, s0.spp, s0.iterations
+    );
+    body.push_str(&report::markdown_table(
+        &[
+            "N",
+            "s/iteration",
+            "of which rendering",
+            "estimator + Adam (s)",
+            "estimator + Adam share",
+        ],
+        &rows,
+    ));
+    let _ = write!(
+        body,
+        "\nThe least-squares line is {a:.4} s + {b:.4} s x N: the cost is linear in N, and each evaluation costs one render. The estimator and Adam stay below {:.3} % of an iteration at every N: the renderer is the cost, as in the paper's Fig. 1.\n",
+        rows.iter()
+            .zip(&runs)
+            .map(|(_, (_, o))| 100.0 * o.summary.overhead_seconds_per_iteration / o.summary.seconds_per_iteration)
+            .fold(0.0, f64::max)
+    );
+    write_page(
+        opts,
+        "fig1",
+        "Supplemental Fig. 1: runtime against N (SHADOW)",
+        &body,
+    )
+}
+
+// ---------------------------------------------------------------------------------------
+// Fig. 2: convergence against N.
+
+fn fig2(opts: &Options) -> Result<()> {
+    let shadow = task("shadow")?;
+    let seeds = opts.seeds(3);
+    let mut series = Vec::new();
+    let mut rows = Vec::new();
+    let mut csv = Vec::new();
+    for n in [2usize, 4, 8, 16] {
+        let mut finals = Vec::new();
+        let mut curves: Vec<Vec<f64>> = Vec::new();
+        for &seed in &seeds {
+            let mut s = Settings::defaults(shadow.as_ref());
+            s.samples = n;
+            s.seed = seed;
+            opts.shrink(&mut s, 60);
+            let o = quiet(shadow.as_ref(), &s)?;
+            finals.push(o.summary.param_mse);
+            curves.push(o.history.iter().map(|r| r.param_mse).collect());
+            for r in &o.history {
+                csv.push(vec![
+                    n.to_string(),
+                    seed.to_string(),
+                    r.iteration.to_string(),
+                    format!("{:e}", r.param_mse),
+                    format!("{:e}", r.loss),
+                    format!("{:.4}", r.seconds),
+                ]);
+            }
+        }
+        let len = curves.iter().map(Vec::len).min().unwrap_or(0);
+        let median: Vec<(f64, f64)> = (0..len)
+            .map(|i| {
+                (
+                    i as f64,
+                    spread(&curves.iter().map(|c| c[i]).collect::<Vec<_>>()).0,
+                )
+            })
+            .collect();
+        series.push(Series::line(format!("N = {n}"), median));
+        let (m, lo, hi) = spread(&finals);
+        rows.push(vec![
+            n.to_string(),
+            sci(m),
+            format!("[{}, {}]", sci(lo), sci(hi)),
+        ]);
+    }
+    report::write_csv(
+        &opts.out.join("fig2.csv"),
+        &["N", "seed", "iteration", "param_mse", "loss", "seconds"],
+        csv,
+    )?;
+    report::plot(
+        &opts.out.join("fig2.png"),
+        &Axes {
+            title: "SHADOW: parameter MSE against iteration (median over seeds)",
+            x_label: "iteration",
+            y_label: "parameter MSE",
+            x_scale: Scale::Linear,
+            y_scale: Scale::Log,
+        },
+        &series,
+    )?;
+    let mut body = format!(
+        "{} seed(s) per N; the curve is the median over seeds.\n\n![fig2](fig2.png)\n\n",
+        seeds.len()
+    );
+    body.push_str(&report::markdown_table(
+        &["N", "final parameter MSE (median)", "[min, max] over seeds"],
+        &rows,
+    ));
+    body.push_str(
+        "\nPaper (supplemental Sec. 2): parameter MSE 9.5e-5 at N = 2 and 4.7e-6 at N = 16.\n",
+    );
+    write_page(
+        opts,
+        "fig2",
+        "Supplemental Fig. 2: convergence against N (SHADOW)",
+        &body,
+    )
+}
+
+// ---------------------------------------------------------------------------------------
+// Fig. 3: final error against sigma0 at two fields of view.
+
+fn fig3(opts: &Options) -> Result<()> {
+    let shadow = task("shadow")?;
+    let sigmas: Vec<f64> = if opts.quick {
+        vec![0.05, 0.5, 1.0]
+    } else {
+        vec![0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0]
+    };
+    let seeds = opts.seeds(2);
+    let mut series = Vec::new();
+    let mut csv = Vec::new();
+    let mut rows = Vec::new();
+    for fov in [39.597755, 60.0] {
+        let mut medians = Vec::new();
+        for &sigma0 in &sigmas {
+            let mut finals = Vec::new();
+            for &seed in &seeds {
+                let mut s = Settings::defaults(shadow.as_ref());
+                s.sigma0 = sigma0;
+                s.seed = seed;
+                s.fov_degrees = Some(fov);
+                opts.shrink(&mut s, 60);
+                let o = quiet(shadow.as_ref(), &s)?;
+                finals.push(o.summary.param_mse);
+                csv.push(summary_csv_row(&o, &[format!("{fov}")]));
+            }
+            let (m, lo, hi) = spread(&finals);
+            medians.push((sigma0, m));
+            rows.push(vec![
+                format!("{fov:.0}"),
+                sigma0.to_string(),
+                sci(m),
+                format!("[{}, {}]", sci(lo), sci(hi)),
+            ]);
+        }
+        series.push(Series::line(
+            format!("{fov:.0} degrees field of view"),
+            medians,
+        ));
+    }
+    report::write_csv(&opts.out.join("fig3.csv"), &header(&["fov"]), csv)?;
+    report::plot(
+        &opts.out.join("fig3.png"),
+        &Axes {
+            title: "SHADOW: final parameter MSE against sigma0 (median over seeds)",
+            x_label: "sigma0",
+            y_label: "final parameter MSE",
+            x_scale: Scale::Linear,
+            y_scale: Scale::Log,
+        },
+        &series,
+    )?;
+    let mut body = format!(
+        "{} seed(s) per point.\n\n![fig3](fig3.png)\n\n",
+        seeds.len()
+    );
+    body.push_str(&report::markdown_table(
+        &[
+            "fov (degrees)",
+            "sigma0",
+            "final parameter MSE (median)",
+            "[min, max]",
+        ],
+        &rows,
+    ));
+    body.push_str("\nPaper (supplemental Fig. 3): below sigma0 = 0.2 the run fails like a plain gradient; near sigma0 = 1 samples leave the view at 40 degrees, fixed at 60 degrees.\n");
+    write_page(
+        opts,
+        "fig3",
+        "Supplemental Fig. 3: final error against sigma0 (SHADOW)",
+        &body,
+    )
+}
+
+// ---------------------------------------------------------------------------------------
+// Table 2: sigma0 = 0.5 on the tasks whose default differs.
+
+fn table2(opts: &Options) -> Result<()> {
+    let mut rows = Vec::new();
+    let mut csv = Vec::new();
+    for name in ["cup", "occlusion", "gi", "caustic"] {
+        let t = task(name)?;
+        if !opts.wants(t.as_ref()) {
+            continue;
+        }
+        let mut s = Settings::defaults(t.as_ref());
+        s.sigma0 = 0.5;
+        opts.shrink(&mut s, 40);
+        let o = quiet(t.as_ref(), &s)?;
+        let paper = t.paper().and_then(|p| p.sigma05);
+        rows.push(vec![
+            name.to_uppercase(),
+            sci(o.summary.image_mse),
+            sci(o.summary.param_mse),
+            paper.map_or("-".into(), |p| sci(p.0)),
+            paper.map_or("-".into(), |p| sci(p.1)),
+        ]);
+        csv.push(summary_csv_row(&o, &[]));
+    }
+    report::write_csv(&opts.out.join("table2.csv"), &header(&[]), csv)?;
+    let mut body = String::from("Every task whose default sigma0 differs from 0.5, re-run at sigma0 = 0.5 with its other defaults.\n\n");
+    body.push_str(&report::markdown_table(
+        &[
+            "task",
+            "ours image MSE",
+            "ours parameter MSE",
+            "paper image MSE",
+            "paper parameter MSE",
+        ],
+        &rows,
+    ));
+    write_page(opts, "table2", "Supplemental Table 2: sigma0 = 0.5", &body)
+}
+
+// ---------------------------------------------------------------------------------------
+// Fig. 4: the TEXTURE task.
+
+fn fig4(opts: &Options) -> Result<()> {
+    let t = task("texture")?;
+    let mut s = Settings::defaults(t.as_ref());
+    opts.shrink(&mut s, 30);
+    let dir = opts.out.join("fig4");
+    let o = run::optimize(t.as_ref(), &s, Some(&dir), false)?;
+    report::write_csv(
+        &opts.out.join("fig4.csv"),
+        &[
+            "iteration",
+            "sigma",
+            "loss",
+            "param_mse",
+            "image_mse",
+            "seconds",
+        ],
+        o.history.iter().map(|r| {
+            vec![
+                r.iteration.to_string(),
+                format!("{:e}", r.sigma),
+                format!("{:e}", r.loss),
+                format!("{:e}", r.param_mse),
+                r.image_mse.map_or(String::new(), |v| format!("{v:e}")),
+                format!("{:.4}", r.seconds),
+            ]
+        }),
+    )?;
+    let m = &o.summary;
+    let body = format!(
+        "{} parameters, N = {}, sigma0 = {}, lr = {}, {} iterations, {} spp.\n\n![convergence](fig4/convergence.png)\n\nTarget, start and result: ![target](fig4/target.png) ![initial](fig4/initial.png) ![final](fig4/final.png)\n\n{}",
+        m.dim,
+        m.samples,
+        m.sigma0,
+        m.lr,
+        m.iterations,
+        m.spp,
+        report::markdown_table(
+            &["", "image MSE", "parameter MSE"],
+            &[vec!["start".into(), sci(m.initial_image_mse), sci(m.initial_param_mse)], vec!["end".into(), sci(m.image_mse), sci(m.param_mse)]]
+        )
+    );
+    write_page(
+        opts,
+        "fig4",
+        "Supplemental Fig. 4: TEXTURE (49,152 parameters)",
+        &body,
+    )
+}
+
+// ---------------------------------------------------------------------------------------
+// Table 4 and the samplers: variants on every task.
+
+fn variants_on_tasks(
+    opts: &Options,
+    name: &str,
+    variants: &[Variant],
+) -> Result<Vec<(String, Vec<Outcome>)>> {
+    let mut per_task = Vec::new();
+    let mut csv = Vec::new();
+    for t in tasks::all() {
+        if !opts.wants(t.as_ref()) {
+            continue;
+        }
+        let mut outcomes = Vec::new();
+        for (label, change) in variants {
+            let mut s = Settings::defaults(t.as_ref());
+            change(&mut s);
+            opts.shrink(&mut s, 30);
+            let o = quiet(t.as_ref(), &s)?;
+            csv.push(summary_csv_row(&o, &[label.to_string()]));
+            outcomes.push(o);
+        }
+        per_task.push((t.name().to_uppercase(), outcomes));
+    }
+    report::write_csv(
+        &opts.out.join(format!("{name}.csv")),
+        &header(&["variant"]),
+        csv,
+    )?;
+    Ok(per_task)
+}
+
+fn ablation(opts: &Options) -> Result<()> {
+    let variants: [Variant; 4] = [
+        ("full", |_| {}),
+        ("no importance sampling", |s| {
+            s.sampling = SamplerArg::Gaussian
+        }),
+        ("no annealing", |s| s.anneal = false),
+        ("no antithetic", |s| s.antithetic = false),
+    ];
+    let per_task = variants_on_tasks(opts, "ablation", &variants)?;
+    let mut rows = Vec::new();
+    let mut sums = vec![0.0; variants.len()];
+    for (name, outcomes) in &per_task {
+        let full = outcomes[0].summary.param_mse;
+        let mut row = vec![name.clone(), sci(full)];
+        for (k, o) in outcomes.iter().enumerate().skip(1) {
+            let ratio = (o.summary.param_mse / full).log10();
+            sums[k] += ratio;
+            row.push(format!("{} ({:+.2})", sci(o.summary.param_mse), ratio));
+        }
+        rows.push(row);
+    }
+    let count = per_task.len().max(1) as f64;
+    let mut mean = vec!["mean log10 ratio".into(), String::new()];
+    mean.extend(sums.iter().skip(1).map(|s| format!("{:+.2}", s / count)));
+    rows.push(mean);
+    let mut head = vec!["task", "full: param MSE"];
+    head.extend(variants.iter().skip(1).map(|v| v.0));
+    let mut body = String::from("Final parameter MSE of each ablation, and in brackets log10(ablation / full): positive means the ablation is worse. \"No importance sampling\" is the Gaussian sampler; \"no antithetic\" draws N independent perturbations.\n\n");
+    body.push_str(&report::markdown_table(&head, &rows));
+    write_page(
+        opts,
+        "ablation",
+        "Main paper Table 4: ablations on every task",
+        &body,
+    )
+}
+
+fn samplers(opts: &Options) -> Result<()> {
+    let variants: [Variant; 3] = [
+        ("radial", |s| s.sampling = SamplerArg::Radial),
+        ("per-coordinate", |s| s.sampling = SamplerArg::PerCoordinate),
+        ("gaussian", |s| s.sampling = SamplerArg::Gaussian),
+    ];
+    let per_task = variants_on_tasks(opts, "samplers", &variants)?;
+    let mut rows = Vec::new();
+    for (name, outcomes) in &per_task {
+        // Error at equal time: each sampler's parameter MSE when the fastest run ended.
+        let budget = outcomes
+            .iter()
+            .map(|o| o.summary.seconds_total)
+            .fold(f64::INFINITY, f64::min);
+        let mut row = vec![name.clone()];
+        for o in outcomes {
+            let at_budget = o
+                .history
+                .iter()
+                .take_while(|r| r.seconds <= budget)
+                .last()
+                .map_or(f64::NAN, |r| r.param_mse);
+            row.push(format!("{} / {}", sci(o.summary.param_mse), sci(at_budget)));
+        }
+        rows.push(row);
+    }
+    let mut head = vec!["task"];
+    head.extend(variants.iter().map(|v| v.0));
+    let mut body = String::from("Each cell: final parameter MSE / parameter MSE at the time the fastest of the three runs finished (equal time).\n\n");
+    body.push_str(&report::markdown_table(&head, &rows));
+    write_page(opts, "samplers", "Samplers on every task", &body)
+}
+
+// ---------------------------------------------------------------------------------------
+// The speed/accuracy trade.
+
+fn tradeoff(opts: &Options) -> Result<()> {
+    let mut csv = Vec::new();
+    let mut body = String::from(
+        "One factor at a time around each task's defaults; every run records its wall time (optimisation only) and final errors. The Pareto front (no other run both faster and more accurate) is marked.\n\n",
+    );
+    for name in ["shadow", "gi"] {
+        let t = task(name)?;
+        if !opts.wants(t.as_ref()) {
+            continue;
+        }
+        let base = Settings::defaults(t.as_ref());
+        let mut configs: Vec<(String, Settings)> = Vec::new();
+        let ns: &[usize] = if opts.quick { &[2, 8] } else { &[2, 4, 8, 16] };
+        let spps: &[u32] = if opts.quick {
+            &[4, 16]
+        } else {
+            &[4, 8, 16, 32, 64]
+        };
+        let scales: &[f64] = if opts.quick {
+            &[0.25, 0.5]
+        } else {
+            &[0.25, 0.5, 0.75, 1.0]
+        };
+        for &n in ns {
+            let mut s = base.clone();
+            s.samples = n;
+            configs.push((format!("N={n}"), s));
+        }
+        for &spp in spps {
+            let mut s = base.clone();
+            s.spp = spp;
+            configs.push((format!("spp={spp}"), s));
+        }
+        for &scale in scales {
+            let mut s = base.clone();
+            s.scale = Some(scale);
+            configs.push((format!("scale={scale}"), s));
+        }
+        for sampler in [SamplerArg::PerCoordinate, SamplerArg::Gaussian] {
+            let mut s = base.clone();
+            s.sampling = sampler;
+            configs.push((format!("{sampler:?}").to_lowercase(), s));
+        }
+        let mut results = Vec::new();
+        for (label, mut s) in configs {
+            if opts.quick {
+                s.iterations = (s.iterations / 10).max(30);
+                s.scale = Some(s.scale.unwrap_or(1.0) * 0.5);
+            }
+            s.eval_every = s.iterations;
+            let o = quiet(t.as_ref(), &s)?;
+            csv.push(summary_csv_row(&o, std::slice::from_ref(&label)));
+            results.push((label, o.summary));
+        }
+        let points: Vec<(f64, f64)> = results
+            .iter()
+            .map(|(_, m)| (m.seconds_total, m.param_mse))
+            .collect();
+        let front = pareto(&points);
+        report::plot(
+            &opts.out.join(format!("tradeoff_{name}.png")),
+            &Axes {
+                title: &format!(
+                    "{}: final parameter MSE against wall time",
+                    name.to_uppercase()
+                ),
+                x_label: "seconds (optimisation)",
+                y_label: "final parameter MSE",
+                x_scale: Scale::Log,
+                y_scale: Scale::Log,
+            },
+            &[
+                Series::markers("runs", points.clone()),
+                Series::line("Pareto front", front.iter().map(|&i| points[i]).collect()),
+            ],
+        )?;
+        // Cost exponents from the one-factor sweeps: log(seconds per iteration) against log(factor).
+        let exponent = |prefix: &str, value: &dyn Fn(&run::Summary) -> f64| {
+            let pts: Vec<(f64, f64)> = results
+                .iter()
+                .filter(|(l, _)| l.starts_with(prefix))
+                .map(|(_, m)| (value(m).ln(), m.seconds_per_iteration.ln()))
+                .collect();
+            fit_line(&pts).1
+        };
+        let e_n = exponent("N=", &|m| m.samples as f64);
+        let e_spp = exponent("spp=", &|m| m.spp as f64);
+        let e_px = exponent("scale=", &|m| (m.width * m.height) as f64);
+        let rows: Vec<Vec<String>> = results
+            .iter()
+            .enumerate()
+            .map(|(i, (label, m))| {
+                vec![
+                    label.clone(),
+                    format!("{}x{}", m.width, m.height),
+                    format!("{:.4}", m.seconds_per_iteration),
+                    format!("{:.1}", m.seconds_total),
+                    sci(m.image_mse),
+                    sci(m.param_mse),
+                    if front.contains(&i) {
+                        "yes".into()
+                    } else {
+                        String::new()
+                    },
+                ]
+            })
+            .collect();
+        let _ = write!(
+            body,
+            "## {}\n\n![tradeoff](tradeoff_{name}.png)\n\n{}\nCost per iteration grows as N^{e_n:.2}, spp^{e_spp:.2} and pixels^{e_px:.2} (least-squares slopes in log-log over the one-factor sweeps).\n\n",
+            name.to_uppercase(),
+            report::markdown_table(&["run", "resolution", "s/iteration", "seconds", "image MSE", "param MSE", "Pareto"], &rows)
+        );
+    }
+    body.push_str("Dimension: the estimator's own cost is linear in n (see `docs/estimators.md`, `cargo bench --bench estimator`); the renders' cost does not depend on n.\n");
+    report::write_csv(&opts.out.join("tradeoff.csv"), &header(&["run"]), csv)?;
+    write_page(
+        opts,
+        "tradeoff",
+        "The speed/accuracy trade (SHADOW and GI)",
+        &body,
+    )
+}
+
+/// Indices of the points no other point beats in both coordinates (smaller is better), by
+/// increasing first coordinate.
+fn pareto(points: &[(f64, f64)]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..points.len())
+        .filter(|&i| points[i].0.is_finite() && points[i].1.is_finite())
+        .collect();
+    order.sort_by(|&a, &b| points[a].0.total_cmp(&points[b].0));
+    let mut best = f64::INFINITY;
+    order
+        .into_iter()
+        .filter(|&i| {
+            let keep = points[i].1 < best;
+            if keep {
+                best = points[i].1;
+            }
+            keep
+        })
+        .collect()
+}
+
+// ---------------------------------------------------------------------------------------
+// Gradient quality at fixed cost.
+
+fn gradient_quality(opts: &Options) -> Result<()> {
+    let shadow = task("shadow")?;
+    let defaults = Settings::defaults(shadow.as_ref());
+    let target = shadow.target();
+    let near: Vec<f64> = target.iter().map(|x| x + 0.1).collect();
+    let places = [
+        ("start", shadow.start(), defaults.sigma0),
+        ("near the optimum", near, 0.05),
+    ];
+    let ns: &[usize] = if opts.quick { &[2, 8] } else { &[2, 4, 8, 16] };
+    let spps: &[u32] = if opts.quick { &[4, 16] } else { &[4, 16, 64] };
+    let repeats = if opts.quick { 4 } else { 24 };
+    let reference_evals = if opts.quick { 32 } else { 512 };
+    let scale = if opts.quick { 0.25 } else { 0.5 };
+    let view = tasks::View {
+        fov_degrees: None,
+        scale: Some(scale),
+    };
+    let seed = defaults.seed;
+    let mut rows = Vec::new();
+    let mut csv = Vec::new();
+    for (place, theta, sigma) in &places {
+        let max_spp = *spps.iter().max().unwrap_or(&32);
+        let reference_image = shadow.render(&target, seed, max_spp, view);
+        let loss = |x: &[f64], _: u64| shadow.render(x, seed, max_spp, view).mse(&reference_image);
+        let mut reference = PlateauFreeGradient::new(Seeded(loss))
+            .samples(reference_evals)
+            .seed(999);
+        let g_ref = reference.estimate(theta, *sigma)?.gradient;
+        let norm_ref = g_ref.iter().map(|g| g * g).sum::<f64>().sqrt();
+        for &spp in spps {
+            let reference_image = shadow.render(&target, seed, spp, view);
+            let loss = |x: &[f64], _: u64| shadow.render(x, seed, spp, view).mse(&reference_image);
+            for &n in ns {
+                let mut est = PlateauFreeGradient::new(Seeded(&loss)).samples(n).seed(1);
+                let mut errors = Vec::new();
+                for _ in 0..repeats {
+                    let g = est.estimate(theta, *sigma)?.gradient;
+                    let err = g
+                        .iter()
+                        .zip(&g_ref)
+                        .map(|(a, b)| (a - b) * (a - b))
+                        .sum::<f64>()
+                        .sqrt()
+                        / norm_ref;
+                    errors.push(err);
+                }
+                let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+                rows.push(vec![
+                    place.to_string(),
+                    n.to_string(),
+                    spp.to_string(),
+                    format!("{mean:.3}"),
+                ]);
+                csv.push(vec![
+                    place.to_string(),
+                    n.to_string(),
+                    spp.to_string(),
+                    format!("{sigma}"),
+                    format!("{mean:e}"),
+                    format!("{norm_ref:e}"),
+                ]);
+            }
+        }
+    }
+    report::write_csv(
+        &opts.out.join("gradient_quality.csv"),
+        &[
+            "place",
+            "N",
+            "spp",
+            "sigma",
+            "mean_relative_error",
+            "reference_norm",
+        ],
+        csv,
+    )?;
+    let mut body = format!(
+        "SHADOW at scale {:?}, every render with the run's fixed seed (as in the optimisation). Reference: one estimate from {reference_evals} evaluations at the highest spp; each cell is the mean over {repeats} estimates of |g - g_ref| / |g_ref|. At the start sigma = {}; near the optimum (target + 0.1 in both coordinates) sigma = 0.05.\n\n",
+        scale,
+        defaults.sigma0
+    );
+    body.push_str(&report::markdown_table(
+        &["place", "N", "spp", "mean relative error"],
+        &rows,
+    ));
+    write_page(
+        opts,
+        "gradient_quality",
+        "Gradient quality against N and spp (SHADOW)",
+        &body,
+    )
+}
