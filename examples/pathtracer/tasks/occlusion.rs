@@ -23,7 +23,7 @@ impl Occlusion {
 /// Depth (world z) of the red sphere's centre: theta in [0, 1] spans z in [-4, 6]; the
 /// camera is at z = 8, the blue sphere at z = 3.
 fn red_z(theta: f32) -> f32 {
-    -4.0 + 10.0 * theta
+    -3.0 + 8.0 * theta.clamp(-0.25, 1.1)
 }
 
 impl Task for Occlusion {
@@ -78,10 +78,10 @@ impl Task for Occlusion {
 
     fn scene(&self, theta: &[f64], view: View) -> Scene {
         let camera = view.camera(
-            Vec3::new(0.0, 0.5, 8.0),
+            Vec3::new(0.0, 0.5, 20.0),
             Vec3::NEG_Z,
             Vec3::Y,
-            40.0,
+            16.0,
             (128, 96),
         );
         let mut quads = vec![
