@@ -332,7 +332,7 @@ fn run_cli(cli: Cli) -> Result<()> {
             seed,
         } => {
             let task = find_task(&task)?;
-            if coordinate >= task.dim() || steps < 2 || !(from < to) {
+            if coordinate >= task.dim() || steps < 2 || from.is_nan() || to.is_nan() || from >= to {
                 return Err("need coordinate < dim, steps >= 2 and from < to".into());
             }
             let spp = spp.unwrap_or(task.defaults().spp);
