@@ -47,11 +47,17 @@ pub struct Options {
     pub out: std::path::PathBuf,
     /// Only these tasks (for the experiments that run every task).
     pub tasks: Option<Vec<String>>,
+    /// Seeds per point where the outcome is noisy (default: the experiment's own).
+    pub seeds: Option<u64>,
 }
 
 impl Options {
     fn seeds(&self, full: u64) -> Vec<u64> {
-        (1..=if self.quick { 1 } else { full }).collect()
+        let count = self
+            .seeds
+            .unwrap_or(if self.quick { 1 } else { full })
+            .max(1);
+        (1..=count).collect()
     }
 
     /// Scales a run down for `--quick`: a tenth of the iterations (at least `min`), half the
@@ -66,8 +72,13 @@ impl Options {
 
     fn command(&self, name: &str) -> String {
         format!(
-            "cargo run --release --example pathtracer -- experiment {name}{} --out {}",
+            "cargo run --release --example pathtracer -- experiment {name}{}{}{} --out {}",
             if self.quick { " --quick" } else { "" },
+            self.seeds
+                .map_or(String::new(), |k| format!(" --seeds {k}")),
+            self.tasks
+                .as_ref()
+                .map_or(String::new(), |t| format!(" --tasks {}", t.join(","))),
             self.out.display()
         )
     }

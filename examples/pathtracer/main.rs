@@ -134,6 +134,9 @@ enum Command {
         /// Only these tasks, for the experiments over every task (comma-separated).
         #[arg(long, value_delimiter = ',')]
         tasks: Option<Vec<String>>,
+        /// Seeds per point where the outcome is noisy (default: the experiment's own).
+        #[arg(long)]
+        seeds: Option<u64>,
         #[arg(long)]
         threads: Option<usize>,
     },
@@ -379,9 +382,18 @@ fn run_cli(cli: Cli) -> Result<()> {
             quick,
             out,
             tasks,
+            seeds,
             threads,
         } => with_threads(threads, || {
-            experiments::run(name, &experiments::Options { quick, out, tasks })
+            experiments::run(
+                name,
+                &experiments::Options {
+                    quick,
+                    out,
+                    tasks,
+                    seeds,
+                },
+            )
         }),
     }
 }
