@@ -56,11 +56,11 @@ impl Task for TextureTask {
     /// Our choice (the paper gives none), see docs/tasks.md.
     fn defaults(&self) -> Defaults {
         Defaults {
-            samples: 8,
+            samples: 32,
             sigma0: 0.1,
             spp: 4,
-            lr: 0.01,
-            iterations: 2000,
+            lr: 0.003,
+            iterations: 4000,
         }
     }
 
