@@ -1,6 +1,8 @@
 //! CAUSTIC: find a light outside the view from the caustic it casts through a glass ball.
+//! The ball plugs the hole of an opaque plate, so the caustic is the only light from the
+//! emitter that reaches the ground the camera sees.
 
-use glam::{Vec3, Vec3A};
+use glam::Vec3;
 
 use super::{param, unit_box, Defaults, Paper, Task, View};
 use crate::render::{Geometry, Lights, Material, Quad, Scene, Sphere};
@@ -15,8 +17,28 @@ impl Caustic {
     }
 }
 
-/// Height of the emitter's plane; theta in [0, 1]^2 spans x, z in [-2, 2] on it.
+// The design and the measurements behind it: docs/tasks.md, CAUSTIC.
+
+/// Height of the emitter, above the plate; theta in [0, 1]^2 spans x, z in
+/// [-LIGHT_RANGE, LIGHT_RANGE].
 const LIGHT_HEIGHT: f32 = 3.0;
+const LIGHT_RANGE: f32 = 2.0;
+/// Side of the square emitter: large and dim, so the caustic is wide and smooth at 32 spp.
+const LAMP_SIZE: f32 = 1.5;
+const RADIANCE: f32 = 5.0;
+/// The opaque plate between the emitter and the ground, and its hole's half-side: the hole
+/// (|x|, |z| <= HOLE) is inscribed in the sphere's cross-section at PLATE_Y (radius
+/// sqrt(1 - 0.5^2) = 0.866 > 0.6 sqrt(2)), so the sphere plugs it.
+const PLATE_Y: f32 = 1.5;
+const HOLE: f32 = 0.6;
+const PLATE_EXTENT: f32 = 8.0;
+const PLATE_ALBEDO: f32 = 0.0;
+/// Radiance of the plate's underside (a dim fill light, independent of theta).
+const FILL: f32 = 0.3;
+/// Camera under the plate, looking at (0, LOOK_Y, 0).
+const EYE: [f32; 3] = [0.0, 1.4, 4.5];
+const LOOK_Y: f32 = 0.0;
+const HFOV: f64 = 45.0;
 
 impl Task for Caustic {
     fn name(&self) -> &'static str {
@@ -24,7 +46,7 @@ impl Task for Caustic {
     }
 
     fn description(&self) -> &'static str {
-        "Move a small area light above the view (x, z, normalised) so that the caustic it casts through a glass sphere matches the reference."
+        "Move an area light above an opaque plate (x, z, normalised) so that the caustic it casts through the glass sphere plugging the plate's hole matches the reference."
     }
 
     fn dim(&self) -> usize {
@@ -53,7 +75,7 @@ impl Task for Caustic {
     }
 
     fn start(&self) -> Vec<f64> {
-        vec![0.75, 0.7]
+        vec![0.5, 0.9]
     }
 
     fn target(&self) -> Vec<f64> {
@@ -69,18 +91,18 @@ impl Task for Caustic {
     }
 
     fn scene(&self, theta: &[f64], view: View) -> Scene {
-        let eye = Vec3::new(0.0, 3.5, 6.0);
+        let eye = Vec3::new(EYE[0], EYE[1], EYE[2]);
         let camera = view.camera(
             eye,
-            Vec3::new(0.0, 0.4, 0.0) - eye,
+            Vec3::new(0.0, LOOK_Y, 0.0) - eye,
             Vec3::Y,
-            45.0,
+            HFOV,
             (128, 96),
         );
-        let light_at = Vec3::new(
-            -2.0 + 4.0 * param(theta, 0),
+        let lamp = Vec3::new(
+            -LIGHT_RANGE + 2.0 * LIGHT_RANGE * param(theta, 0),
             LIGHT_HEIGHT,
-            -2.0 + 4.0 * param(theta, 1),
+            -LIGHT_RANGE + 2.0 * LIGHT_RANGE * param(theta, 1),
         );
         // Ground facing up (z x x = +y).
         let mut quads = vec![Quad::centered(
@@ -89,16 +111,30 @@ impl Task for Caustic {
             Vec3::X * 16.0,
             0,
         )];
-        let mut lights = Lights {
-            environment: Vec3A::splat(0.05),
-            environment_nee: false,
-            ..Default::default()
-        };
-        // Facing down (x x z = -y).
+        let mut lights = Lights::default();
+        // The plate: an opaque square [-8, 8]^2 at PLATE_Y with a square hole of half-side
+        // HOLE around the vertical through the sphere's centre, inscribed in the sphere's
+        // cross-section there, so every ray through the hole enters the glass.
+        let (e, h, y) = (PLATE_EXTENT, HOLE, PLATE_Y);
+        for (lo, hi) in [
+            (Vec3::new(-e, y, -e), Vec3::new(e, y, -h)),
+            (Vec3::new(-e, y, h), Vec3::new(e, y, e)),
+            (Vec3::new(-e, y, -h), Vec3::new(-h, y, h)),
+            (Vec3::new(h, y, -h), Vec3::new(e, y, h)),
+        ] {
+            // Facing down (x x z = -y): the plate's underside glows dimly (a fill light).
+            lights.add_area(
+                &mut quads,
+                Quad::new(lo, Vec3::X * (hi.x - lo.x), Vec3::Z * (hi.z - lo.z), 1),
+                Vec3::splat(FILL),
+            );
+        }
+        // The emitter, facing down (x x z = -y): its light reaches the space under the plate
+        // only through the sphere.
         lights.add_area(
             &mut quads,
-            Quad::centered(light_at, Vec3::X * 1.0, Vec3::Z * 1.0, 1),
-            Vec3::splat(25.0),
+            Quad::centered(lamp, Vec3::X * LAMP_SIZE, Vec3::Z * LAMP_SIZE, 1),
+            Vec3::splat(RADIANCE),
         );
         Scene {
             camera,
@@ -109,7 +145,7 @@ impl Task for Caustic {
             },
             materials: vec![
                 Material::diffuse(0.8, 0.8, 0.8),
-                Material::diffuse(0.0, 0.0, 0.0),
+                Material::diffuse(PLATE_ALBEDO, PLATE_ALBEDO, PLATE_ALBEDO),
                 Material::Dielectric { ior: 1.5 },
             ],
             textures: vec![],
