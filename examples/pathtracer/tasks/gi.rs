@@ -18,6 +18,15 @@ impl Gi {
     }
 }
 
+/// The inset camera (design and measurements: docs/tasks.md, GI). It stands at x = -0.9 and
+/// turns right by half its field of view (LOOK is 4.2 deep and 4.2 tan(14 deg) = 1.046 to the
+/// right), so the image's left edge is the plane x = -0.9: the left wall (x = -1) is never in
+/// view, while the floor beside it, the back wall's left part and the tall box's left face,
+/// the surfaces the wall lights most, are. The frustum's top stays below the ceiling.
+const EYE: [f32; 3] = [-0.9, 0.9, 3.2];
+const LOOK: [f32; 3] = [0.146, 0.6, -1.0];
+const HFOV: f64 = 28.0;
+
 impl Task for Gi {
     fn name(&self) -> &'static str {
         "gi"
@@ -70,14 +79,8 @@ impl Task for Gi {
     }
 
     fn scene(&self, theta: &[f64], view: View) -> Scene {
-        let eye = Vec3::new(0.35, 0.9, 3.2);
-        let camera = view.camera(
-            eye,
-            Vec3::new(0.3, 0.6, -0.3) - eye,
-            Vec3::Y,
-            28.0,
-            (128, 128),
-        );
+        let eye = Vec3::from(EYE);
+        let camera = view.camera(eye, Vec3::from(LOOK) - eye, Vec3::Y, HFOV, (128, 128));
         let p = |i| param(theta, i);
         let wall = |i| p(i).clamp(0.0, 1.0);
         // Box [-1, 1] x [0, 2] x [-1, 1], open at +z.
