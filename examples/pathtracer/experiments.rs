@@ -60,11 +60,11 @@ impl Options {
         (1..=count).collect()
     }
 
-    /// Scales a run down for `--quick`: a tenth of the iterations (at least `min`), half the
-    /// resolution.
+    /// Scales a run down for `--quick`: a twentieth of the iterations (at least `min`), half
+    /// the resolution. Quick runs only check that the experiment works end to end.
     fn shrink(&self, s: &mut Settings, min: usize) {
         if self.quick {
-            s.iterations = (s.iterations / 10).max(min);
+            s.iterations = (s.iterations / 20).max(min);
             s.scale = Some(s.scale.unwrap_or(1.0) * 0.5);
         }
         s.eval_every = (s.iterations / 50).max(1);
@@ -84,10 +84,13 @@ impl Options {
         )
     }
 
+    /// Whether an experiment over every task includes `task`: the `--tasks` list if given;
+    /// otherwise every task, or in a quick run the two cheapest (a smoke test, not a result).
     fn wants(&self, task: &dyn Task) -> bool {
-        self.tasks
-            .as_ref()
-            .is_none_or(|names| names.iter().any(|n| n == task.name()))
+        match &self.tasks {
+            Some(names) => names.iter().any(|n| n == task.name()),
+            None => !self.quick || ["cup", "shadow"].contains(&task.name()),
+        }
     }
 }
 
@@ -268,7 +271,10 @@ fn fig1(opts: &Options) -> Result<()> {
         &[
             Series::markers("measured (render + estimator + Adam)", total.clone()),
             Series::line(format!("fit {a:.4} + {b:.4} N"), fitted),
-            Series::markers("everything but rendering (estimator, Adam, loss)", overhead.clone()),
+            Series::markers(
+                "everything but rendering (estimator, Adam, loss)",
+                overhead.clone(),
+            ),
         ],
     )?;
     let rows: Vec<Vec<String>> = runs
@@ -334,7 +340,7 @@ fn fig2(opts: &Options) -> Result<()> {
             let mut s = Settings::defaults(shadow.as_ref());
             s.samples = n;
             s.seed = seed;
-            opts.shrink(&mut s, 60);
+            opts.shrink(&mut s, 40);
             let o = quiet(shadow.as_ref(), &s)?;
             finals.push(o.summary.param_mse);
             curves.push(o.history.iter().map(|r| r.param_mse).collect());
@@ -424,7 +430,7 @@ fn fig3(opts: &Options) -> Result<()> {
                 s.sigma0 = sigma0;
                 s.seed = seed;
                 s.fov_degrees = Some(fov);
-                opts.shrink(&mut s, 60);
+                opts.shrink(&mut s, 40);
                 let o = quiet(shadow.as_ref(), &s)?;
                 finals.push(o.summary.param_mse);
                 csv.push(summary_csv_row(&o, &[format!("{fov}")]));
@@ -688,14 +694,14 @@ fn tradeoff(opts: &Options) -> Result<()> {
         }
         let base = Settings::defaults(t.as_ref());
         let mut configs: Vec<(String, Settings)> = Vec::new();
-        let ns: &[usize] = if opts.quick { &[2, 8] } else { &[2, 4, 8, 16] };
+        let ns: &[usize] = if opts.quick { &[2, 4] } else { &[2, 4, 8, 16] };
         let spps: &[u32] = if opts.quick {
-            &[4, 16]
+            &[8]
         } else {
             &[4, 8, 16, 32, 64]
         };
         let scales: &[f64] = if opts.quick {
-            &[0.25, 0.5]
+            &[0.5]
         } else {
             &[0.25, 0.5, 0.75, 1.0]
         };
@@ -722,7 +728,7 @@ fn tradeoff(opts: &Options) -> Result<()> {
         let mut results = Vec::new();
         for (label, mut s) in configs {
             if opts.quick {
-                s.iterations = (s.iterations / 10).max(30);
+                s.iterations = (s.iterations / 20).max(30);
                 s.scale = Some(s.scale.unwrap_or(1.0) * 0.5);
             }
             s.eval_every = s.iterations;
@@ -915,4 +921,49 @@ fn gradient_quality(opts: &Options) -> Result<()> {
         "Gradient quality against N and spp (SHADOW)",
         &body,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// CI's smoke test of every experiment command: the `--quick` variant of each writes its
+    /// page (naming the command), its CSV and its plots. The numbers of such short runs mean
+    /// nothing; that the commands work from a clean checkout is the point.
+    #[test]
+    fn every_quick_experiment_writes_its_page_csv_and_plots() {
+        let out = std::env::temp_dir().join(format!("plateau-experiments-{}", std::process::id()));
+        let opts = Options {
+            quick: true,
+            out: out.clone(),
+            tasks: None,
+            seeds: None,
+        };
+        use clap::ValueEnum;
+        for experiment in Experiment::value_variants() {
+            run(*experiment, &opts).unwrap_or_else(|e| panic!("{experiment:?}: {e}"));
+            let name = format!("{experiment:?}").to_lowercase();
+            let stem = match name.as_str() {
+                "gradientquality" => "gradient_quality".to_string(),
+                other => other.to_string(),
+            };
+            let page = fs::read_to_string(out.join(format!("{stem}.md"))).expect("page written");
+            assert!(
+                page.contains("cargo run --release --example pathtracer -- experiment"),
+                "{stem}: {page}"
+            );
+            assert!(out.join(format!("{stem}.csv")).exists(), "{stem}.csv");
+        }
+        for plot in [
+            "fig1.png",
+            "fig2.png",
+            "fig3.png",
+            "fig4/convergence.png",
+            "tradeoff_shadow.png",
+            "tradeoff_gi.png",
+        ] {
+            assert!(out.join(plot).exists(), "{plot}");
+        }
+        let _ = fs::remove_dir_all(&out);
+    }
 }
