@@ -57,7 +57,7 @@ impl Options {
             .seeds
             .unwrap_or(if self.quick { 1 } else { full })
             .max(1);
-        (1..=count).collect()
+        (0..count).collect()
     }
 
     /// Scales a run down for `--quick`: a twentieth of the iterations (at least `min`), half

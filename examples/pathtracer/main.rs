@@ -117,7 +117,7 @@ enum Command {
         sigmas: Vec<f64>,
         #[arg(long)]
         spp: Option<u32>,
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 0)]
         seed: u64,
     },
     /// One of the supplemental's experiments or the speed/accuracy study: CSV, plots and a

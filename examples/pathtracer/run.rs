@@ -98,7 +98,7 @@ impl Settings {
             lr: d.lr,
             spp: d.spp,
             iterations: d.iterations,
-            seed: 1,
+            seed: 0,
             crn: Crn::Fixed,
             fd_step: 1e-3,
             fov_degrees: None,
