@@ -532,27 +532,7 @@ fn fig4(opts: &Options) -> Result<()> {
     opts.shrink(&mut s, 30);
     let dir = opts.out.join("fig4");
     let o = run::optimize(t.as_ref(), &s, Some(&dir), false)?;
-    report::write_csv(
-        &opts.out.join("fig4.csv"),
-        &[
-            "iteration",
-            "sigma",
-            "loss",
-            "param_mse",
-            "image_mse",
-            "seconds",
-        ],
-        o.history.iter().map(|r| {
-            vec![
-                r.iteration.to_string(),
-                format!("{:e}", r.sigma),
-                format!("{:e}", r.loss),
-                format!("{:e}", r.param_mse),
-                r.image_mse.map_or(String::new(), |v| format!("{v:e}")),
-                format!("{:.4}", r.seconds),
-            ]
-        }),
-    )?;
+    run::write_history(&opts.out.join("fig4.csv"), &o.history)?;
     let m = &o.summary;
     let body = format!(
         "{} parameters, N = {}, sigma0 = {}, lr = {}, {} iterations, {} spp.\n\n![convergence](fig4/convergence.png)\n\nTarget, start and result: ![target](fig4/target.png) ![initial](fig4/initial.png) ![final](fig4/final.png)\n\n{}",

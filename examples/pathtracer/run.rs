@@ -390,6 +390,31 @@ pub fn plan_for_budget(task: &dyn Task, s: &Settings, budget: f64) -> (Settings,
     (plan, why)
 }
 
+/// `history.csv`: one row per iteration.
+pub fn write_history(path: &Path, history: &[Row]) -> Result<()> {
+    report::write_csv(
+        path,
+        &[
+            "iteration",
+            "sigma",
+            "loss",
+            "param_mse",
+            "image_mse",
+            "seconds",
+        ],
+        history.iter().map(|r| {
+            vec![
+                r.iteration.to_string(),
+                format!("{:e}", r.sigma),
+                format!("{:e}", r.loss),
+                format!("{:e}", r.param_mse),
+                r.image_mse.map_or(String::new(), |v| format!("{v:e}")),
+                format!("{:.6}", r.seconds),
+            ]
+        }),
+    )
+}
+
 fn progress_bar(name: &str, iterations: usize, show: bool) -> ProgressBar {
     if !show {
         return ProgressBar::hidden();
@@ -431,27 +456,7 @@ fn write_outputs(
     }
 
     let h = &outcome.history;
-    report::write_csv(
-        &dir.join("history.csv"),
-        &[
-            "iteration",
-            "sigma",
-            "loss",
-            "param_mse",
-            "image_mse",
-            "seconds",
-        ],
-        h.iter().map(|r| {
-            vec![
-                r.iteration.to_string(),
-                format!("{:e}", r.sigma),
-                format!("{:e}", r.loss),
-                format!("{:e}", r.param_mse),
-                r.image_mse.map_or(String::new(), |v| format!("{v:e}")),
-                format!("{:.6}", r.seconds),
-            ]
-        }),
-    )?;
+    write_history(&dir.join("history.csv"), h)?;
     let title = format!("{}: {}", task.name().to_uppercase(), s.label());
     report::plot(
         &dir.join("convergence.png"),
