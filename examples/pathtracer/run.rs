@@ -235,7 +235,13 @@ pub fn optimize(
     } else {
         Annealer::constant(s.sigma0, s.iterations)?
     };
-    let mut optimizer = Optimizer::new(adam, annealer).record_theta(task.dim() <= 1024);
+    // The loop keeps only the last theta; the run keeps six snapshots for the progress strip
+    // (a 49,152-parameter theta per iteration would be 1.5 GB over 4000 iterations).
+    let mut optimizer = Optimizer::new(adam, annealer).record_theta(false);
+    let snapshot_at: Vec<usize> = (0..6)
+        .map(|k| k * s.iterations.saturating_sub(1) / 5)
+        .collect();
+    let mut snapshots = vec![start.clone()];
 
     let bar = progress_bar(task.name(), s.iterations, show_progress);
     let mut history = Vec::with_capacity(s.iterations);
@@ -245,6 +251,9 @@ pub fn optimize(
         optimisation_time += last.elapsed();
         let seconds = optimisation_time.as_secs_f64();
         let is_last = step.iteration + 1 == s.iterations;
+        if snapshot_at[1..].contains(&step.iteration) {
+            snapshots.push(step.theta.to_vec());
+        }
         let image_mse = (step.iteration % s.eval_every == 0 || is_last)
             .then(|| task.render(step.theta, s.seed, s.spp, view).mse(&reference));
         history.push(Row {
@@ -319,7 +328,7 @@ pub fn optimize(
             s,
             &outcome,
             [&reference, &initial, &final_image],
-            &run.theta,
+            &snapshots,
             dir,
         )?;
     }
@@ -444,12 +453,12 @@ fn write_outputs(
     final_image.save(&dir.join("final.png"))?;
     final_image.save(&dir.join("final.exr"))?;
 
-    // The progress strip: six moments of the run, then the target.
+    // The progress strip: the start, five moments of the run, then the target.
     if thetas.len() > 1 {
         let view = s.view();
-        let picks = (0..6).map(|k| k * (thetas.len() - 1) / 5);
-        let mut frames: Vec<Image> = picks
-            .map(|i| task.render(&thetas[i], s.seed, s.spp, view))
+        let mut frames: Vec<Image> = thetas
+            .iter()
+            .map(|theta| task.render(theta, s.seed, s.spp, view))
             .collect();
         frames.push(target.clone());
         report::strip(&frames).save(&dir.join("progress.png"))?;
