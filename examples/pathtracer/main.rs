@@ -95,6 +95,14 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Median render time of every task at its defaults (target parameters, seed 0, scene
+    /// set-up excluded), as a markdown table.
+    Timings {
+        #[arg(long, default_value_t = 11)]
+        repeat: usize,
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// The loss along one coordinate through the target (or the start): a CSV of theta_i,
     /// the image MSE against the reference, and the loss smoothed by Gaussians of the given
     /// spreads (a quadrature over the same grid), to see plateaus and what smoothing does.
@@ -323,6 +331,32 @@ fn run_cli(cli: Cli) -> Result<()> {
             tasks,
             threads,
         } => with_threads(threads, || all(&out, quick, tasks.as_deref())),
+        Command::Timings { repeat, threads } => {
+            with_threads(threads, || {
+                println!("| task | resolution | spp | depth | median render (s) |\n|---|---|---|---|---|");
+                for task in tasks::all() {
+                    let scene = task.scene(&task.target(), View::default());
+                    let spp = task.defaults().spp;
+                    let settings = render::Settings::new(spp, 0, task.max_depth());
+                    let mut times: Vec<f64> = (0..repeat.max(1))
+                        .map(|_| {
+                            let t = Instant::now();
+                            let _ = render::render(&scene, &settings);
+                            t.elapsed().as_secs_f64()
+                        })
+                        .collect();
+                    times.sort_by(f64::total_cmp);
+                    let (w, h) = (scene.camera.width, scene.camera.height);
+                    println!(
+                        "| {} | {w}x{h} | {spp} | {} | {:.4} |",
+                        task.name(),
+                        task.max_depth(),
+                        times[times.len() / 2]
+                    );
+                }
+                Ok(())
+            })
+        }
         Command::Landscape {
             task,
             coordinate,
