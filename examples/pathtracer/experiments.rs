@@ -9,7 +9,7 @@ use std::fs;
 
 use plateau::{PlateauFreeGradient, Seeded};
 
-use crate::report::{self, sci, Axes, Result, Scale, Series};
+use crate::report::{self, sci, spread, Axes, Result, Scale, Series};
 use crate::run::{self, Outcome, SamplerArg, Settings};
 use crate::tasks::{self, Task};
 
@@ -130,22 +130,6 @@ fn quiet(task: &dyn Task, s: &Settings) -> Result<Outcome> {
         m.seconds_per_iteration
     );
     Ok(outcome)
-}
-
-/// Median, minimum and maximum.
-fn spread(values: &[f64]) -> (f64, f64, f64) {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
-    if v.is_empty() {
-        return (f64::NAN, f64::NAN, f64::NAN);
-    }
-    v.sort_by(f64::total_cmp);
-    let mid = v.len() / 2;
-    let median = if v.len() % 2 == 1 {
-        v[mid]
-    } else {
-        0.5 * (v[mid - 1] + v[mid])
-    };
-    (median, v[0], v[v.len() - 1])
 }
 
 /// Least squares `y = a + b x`.

@@ -92,6 +92,10 @@ enum Command {
         /// Only these tasks (comma-separated).
         #[arg(long, value_delimiter = ',')]
         tasks: Option<Vec<String>>,
+        /// Runs of the plateau-free gradient per task (seeds 0, 1, ...): the table reports
+        /// the median and the range.
+        #[arg(long, default_value_t = 1)]
+        seeds: u64,
         #[arg(long)]
         threads: Option<usize>,
     },
@@ -329,8 +333,9 @@ fn run_cli(cli: Cli) -> Result<()> {
             out,
             quick,
             tasks,
+            seeds,
             threads,
-        } => with_threads(threads, || all(&out, quick, tasks.as_deref())),
+        } => with_threads(threads, || all(&out, quick, tasks.as_deref(), seeds.max(1))),
         Command::Timings { repeat, threads } => {
             with_threads(threads, || {
                 println!("| task | resolution | spp | depth | median render (s) |\n|---|---|---|---|---|");
@@ -456,7 +461,7 @@ where
 
 /// Every task with the plateau-free gradient and, where it is affordable, the finite-difference
 /// baseline; then `results.md`.
-fn all(out: &Path, quick: bool, only: Option<&[String]>) -> Result<()> {
+fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64) -> Result<()> {
     let mut rows = Vec::new();
     for task in tasks::all() {
         if only.is_some_and(|names| !names.iter().any(|n| n == task.name())) {
@@ -468,7 +473,16 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>) -> Result<()> {
             plateau.eval_every = (plateau.iterations / 20).max(1);
             plateau.scale = Some(0.5);
         }
-        let ours = run::optimize(task.as_ref(), &plateau, Some(&out.join(task.name())), true)?;
+        let mut ours = Vec::new();
+        for seed in 0..seeds {
+            let mut s = plateau.clone();
+            s.seed = seed;
+            let dir = match seed {
+                0 => out.join(task.name()),
+                k => out.join(format!("{}-seed{k}", task.name())),
+            };
+            ours.push(run::optimize(task.as_ref(), &s, Some(&dir), true)?);
+        }
         // Central differences cost 2n renders per iteration: affordable for the
         // low-dimensional tasks only (SORT would need 300 renders an iteration).
         let fd = if task.dim() <= 8 {
@@ -483,11 +497,13 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>) -> Result<()> {
         } else {
             None
         };
-        let s = &ours.summary;
-        println!(
-            "{:>10}: param MSE {:.3e}, image MSE {:.3e}, {:.3} s/iteration",
-            s.task, s.param_mse, s.image_mse, s.seconds_per_iteration
-        );
+        for o in &ours {
+            let s = &o.summary;
+            println!(
+                "{:>10}: seed {} param MSE {:.3e}, image MSE {:.3e}, {:.3} s/iteration",
+                s.task, s.seed, s.param_mse, s.image_mse, s.seconds_per_iteration
+            );
+        }
         rows.push(results_row(task.as_ref(), &ours, fd.as_ref()));
     }
     let header = [
@@ -496,11 +512,12 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>) -> Result<()> {
         "sigma0",
         "spp",
         "iters",
+        "seeds",
         "ours img MSE",
         "ours param MSE",
         "paper img MSE",
         "paper param MSE",
-        "at or below paper param MSE",
+        "runs at or below paper param MSE",
         "FD img MSE",
         "FD param MSE",
         "Mitsuba 3 param MSE (paper)",
@@ -509,8 +526,11 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>) -> Result<()> {
     ];
     let mut md = String::from("# Results: the paper's tasks\n\n");
     md.push_str(&format!(
-        "Produced by `cargo run --release --example pathtracer -- all{}`. \"ours\" is the plateau-free gradient at the paper's hyperparameters (supplemental Table 1); FD is a central finite difference (step 1e-3) on the same renderer, loop and settings (run only where its 2n renders per iteration are affordable). Paper numbers: main paper Tables 2 and 3.\n\n",
-        if quick { " --quick" } else { "" }
+        "Produced by `cargo run --release --example pathtracer -- all{}{}{} --out {}`. \"ours\" is the plateau-free gradient at the paper's hyperparameters (supplemental Table 1), with seeds 0, 1, ... (with several seeds: the median [min, max]); FD is a central finite difference (step 1e-3) on the same renderer, loop and settings (run only where its 2n renders per iteration are affordable). Paper numbers: main paper Tables 2 and 3.\n\n",
+        if quick { " --quick" } else { "" },
+        if seeds > 1 { format!(" --seeds {seeds}") } else { String::new() },
+        only.map_or(String::new(), |t| format!(" --tasks {}", t.join(","))),
+        out.display()
     ));
     md.push_str(&report::markdown_table(&header, &rows));
     std::fs::create_dir_all(out)?;
@@ -519,26 +539,40 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>) -> Result<()> {
     Ok(())
 }
 
-fn results_row(task: &dyn Task, ours: &run::Outcome, fd: Option<&run::Outcome>) -> Vec<String> {
-    let s = &ours.summary;
+fn results_row(task: &dyn Task, ours: &[run::Outcome], fd: Option<&run::Outcome>) -> Vec<String> {
+    let s = &ours[0].summary;
     let paper = task.paper();
     let cell = |v: Option<f64>| v.map_or("-".to_string(), report::sci);
+    // One run: its value; several: the median and the range over seeds.
+    let over_seeds = |value: fn(&run::Summary) -> f64| {
+        let values: Vec<f64> = ours.iter().map(|o| value(&o.summary)).collect();
+        let (median, lo, hi) = report::spread(&values);
+        if values.len() == 1 {
+            report::sci(median)
+        } else {
+            format!(
+                "{} [{}, {}]",
+                report::sci(median),
+                report::sci(lo),
+                report::sci(hi)
+            )
+        }
+    };
+    let param: Vec<f64> = ours.iter().map(|o| o.summary.param_mse).collect();
     vec![
         task.name().to_uppercase(),
         s.samples.to_string(),
         s.sigma0.to_string(),
         s.spp.to_string(),
         s.iterations.to_string(),
-        report::sci(s.image_mse),
-        report::sci(s.param_mse),
+        ours.len().to_string(),
+        over_seeds(|m| m.image_mse),
+        over_seeds(|m| m.param_mse),
         cell(paper.map(|p| p.image_mse)),
         cell(paper.map(|p| p.param_mse)),
         paper.map_or("-".into(), |p| {
-            if s.param_mse <= p.param_mse {
-                "yes".into()
-            } else {
-                "no".into()
-            }
+            let below = param.iter().filter(|&&v| v <= p.param_mse).count();
+            format!("{below} of {}", param.len())
         }),
         cell(fd.map(|f| f.summary.image_mse)),
         cell(fd.map(|f| f.summary.param_mse)),

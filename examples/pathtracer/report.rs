@@ -280,3 +280,19 @@ pub fn sci(v: f64) -> String {
         "-".into()
     }
 }
+
+/// Median, minimum and maximum.
+pub fn spread(values: &[f64]) -> (f64, f64, f64) {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return (f64::NAN, f64::NAN, f64::NAN);
+    }
+    v.sort_by(f64::total_cmp);
+    let mid = v.len() / 2;
+    let median = if v.len() % 2 == 1 {
+        v[mid]
+    } else {
+        0.5 * (v[mid - 1] + v[mid])
+    };
+    (median, v[0], v[v.len() - 1])
+}
