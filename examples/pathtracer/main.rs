@@ -96,6 +96,9 @@ enum Command {
         /// the median and the range.
         #[arg(long, default_value_t = 1)]
         seeds: u64,
+        /// Skip the finite-difference baseline.
+        #[arg(long)]
+        no_baseline: bool,
         #[arg(long)]
         threads: Option<usize>,
     },
@@ -334,8 +337,11 @@ fn run_cli(cli: Cli) -> Result<()> {
             quick,
             tasks,
             seeds,
+            no_baseline,
             threads,
-        } => with_threads(threads, || all(&out, quick, tasks.as_deref(), seeds.max(1))),
+        } => with_threads(threads, || {
+            all(&out, quick, tasks.as_deref(), seeds.max(1), !no_baseline)
+        }),
         Command::Timings { repeat, threads } => {
             with_threads(threads, || {
                 println!("| task | resolution | spp | depth | median render (s) |\n|---|---|---|---|---|");
@@ -461,7 +467,7 @@ where
 
 /// Every task with the plateau-free gradient and, where it is affordable, the finite-difference
 /// baseline; then `results.md`.
-fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64) -> Result<()> {
+fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64, baseline: bool) -> Result<()> {
     let mut rows = Vec::new();
     for task in tasks::all() {
         if only.is_some_and(|names| !names.iter().any(|n| n == task.name())) {
@@ -485,7 +491,7 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64) -> Result<(
         }
         // Central differences cost 2n renders per iteration: affordable for the
         // low-dimensional tasks only (SORT would need 300 renders an iteration).
-        let fd = if task.dim() <= 8 {
+        let fd = if baseline && task.dim() <= 8 {
             let mut fd = plateau.clone();
             fd.method = Method::Fd;
             Some(run::optimize(
@@ -528,7 +534,8 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64) -> Result<(
     md.push_str(&format!(
         "Produced by `cargo run --release --example pathtracer -- all{}{}{} --out {}`. \"ours\" is the plateau-free gradient at the paper's hyperparameters (supplemental Table 1), with seeds 0, 1, ... (with several seeds: the median [min, max]); FD is a central finite difference (step 1e-3) on the same renderer, loop and settings (run only where its 2n renders per iteration are affordable). Paper numbers: main paper Tables 2 and 3.\n\n",
         if quick { " --quick" } else { "" },
-        if seeds > 1 { format!(" --seeds {seeds}") } else { String::new() },
+        if seeds > 1 { format!(" --seeds {seeds}") } else { String::new() }
+            + if baseline { "" } else { " --no-baseline" },
         only.map_or(String::new(), |t| format!(" --tasks {}", t.join(","))),
         out.display()
     ));
