@@ -102,6 +102,18 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Rewrites `results.md` in a directory of runs (as `all` leaves it) from their
+    /// `summary.json` files.
+    Summarize {
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+        /// The command that produced the runs, for the page.
+        #[arg(
+            long,
+            default_value = "cargo run --release --example pathtracer -- all"
+        )]
+        command: String,
+    },
     /// Median render time of every task at its defaults (target parameters, seed 0, scene
     /// set-up excluded), as a markdown table.
     Timings {
@@ -342,6 +354,7 @@ fn run_cli(cli: Cli) -> Result<()> {
         } => with_threads(threads, || {
             all(&out, quick, tasks.as_deref(), seeds.max(1), !no_baseline)
         }),
+        Command::Summarize { out, command } => summarize(&out, &command),
         Command::Timings { repeat, threads } => {
             with_threads(threads, || {
                 println!("| task | resolution | spp | depth | median render (s) |\n|---|---|---|---|---|");
@@ -468,7 +481,18 @@ where
 /// Every task with the plateau-free gradient and, where it is affordable, the finite-difference
 /// baseline; then `results.md`.
 fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64, baseline: bool) -> Result<()> {
-    let mut rows = Vec::new();
+    let command = format!(
+        "cargo run --release --example pathtracer -- all{}{}{}{} --out {}",
+        if quick { " --quick" } else { "" },
+        if seeds > 1 {
+            format!(" --seeds {seeds}")
+        } else {
+            String::new()
+        },
+        if baseline { "" } else { " --no-baseline" },
+        only.map_or(String::new(), |t| format!(" --tasks {}", t.join(","))),
+        out.display()
+    );
     for task in tasks::all() {
         if only.is_some_and(|names| !names.iter().any(|n| n == task.name())) {
             continue;
@@ -491,25 +515,39 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64, baseline: b
         }
         // Central differences cost 2n renders per iteration: affordable for the
         // low-dimensional tasks only (SORT would need 300 renders an iteration).
-        let fd = if baseline && task.dim() <= 8 {
+        if baseline && task.dim() <= 8 {
             let mut fd = plateau.clone();
             fd.method = Method::Fd;
-            Some(run::optimize(
+            run::optimize(
                 task.as_ref(),
                 &fd,
                 Some(&out.join(format!("{}-fd", task.name()))),
                 true,
-            )?)
-        } else {
-            None
-        };
-        for o in &ours {
-            let s = &o.summary;
-            println!(
-                "{:>10}: seed {} param MSE {:.3e}, image MSE {:.3e}, {:.3} s/iteration",
-                s.task, s.seed, s.param_mse, s.image_mse, s.seconds_per_iteration
-            );
+            )?;
         }
+        // Rewritten after every task, so that an interrupted run still leaves its table.
+        summarize(out, &command)?;
+    }
+    println!("wrote {}", out.join("results.md").display());
+    Ok(())
+}
+
+/// `results.md` in `out`: a table of every task's runs found there (`<task>/`,
+/// `<task>-seed<k>/`, `<task>-fd/`, each with its `summary.json`) beside the paper's numbers.
+/// `command` is what produced the runs.
+fn summarize(out: &Path, command: &str) -> Result<()> {
+    let read = |dir: PathBuf| -> Option<run::Summary> {
+        let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
+        serde_json::from_str(&text).ok()
+    };
+    let mut rows = Vec::new();
+    for task in tasks::all() {
+        let Some(first) = read(out.join(task.name())) else {
+            continue;
+        };
+        let mut ours = vec![first];
+        ours.extend((1..).map_while(|k| read(out.join(format!("{}-seed{k}", task.name())))));
+        let fd = read(out.join(format!("{}-fd", task.name())));
         rows.push(results_row(task.as_ref(), &ours, fd.as_ref()));
     }
     let header = [
@@ -532,27 +570,22 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64, baseline: b
     ];
     let mut md = String::from("# Results: the paper's tasks\n\n");
     md.push_str(&format!(
-        "Produced by `cargo run --release --example pathtracer -- all{}{}{} --out {}`. \"ours\" is the plateau-free gradient at the paper's hyperparameters (supplemental Table 1), with seeds 0, 1, ... (with several seeds: the median [min, max]); FD is a central finite difference (step 1e-3) on the same renderer, loop and settings (run only where its 2n renders per iteration are affordable). Paper numbers: main paper Tables 2 and 3.\n\n",
-        if quick { " --quick" } else { "" },
-        if seeds > 1 { format!(" --seeds {seeds}") } else { String::new() }
-            + if baseline { "" } else { " --no-baseline" },
-        only.map_or(String::new(), |t| format!(" --tasks {}", t.join(","))),
+        "Runs by `{command}`; this table by `cargo run --release --example pathtracer -- summarize --out {}` from their `summary.json` files. \"ours\" is the plateau-free gradient at the paper's hyperparameters (supplemental Table 1), with seeds 0, 1, ... (with several seeds: the median [min, max]); FD is a central finite difference (step 1e-3) on the same renderer, loop and settings (run only where its 2n renders per iteration are affordable). Paper numbers: main paper Tables 2 and 3.\n\n",
         out.display()
     ));
     md.push_str(&report::markdown_table(&header, &rows));
     std::fs::create_dir_all(out)?;
     std::fs::write(out.join("results.md"), md)?;
-    println!("wrote {}", out.join("results.md").display());
     Ok(())
 }
 
-fn results_row(task: &dyn Task, ours: &[run::Outcome], fd: Option<&run::Outcome>) -> Vec<String> {
-    let s = &ours[0].summary;
+fn results_row(task: &dyn Task, ours: &[run::Summary], fd: Option<&run::Summary>) -> Vec<String> {
+    let s = &ours[0];
     let paper = task.paper();
     let cell = |v: Option<f64>| v.map_or("-".to_string(), report::sci);
     // One run: its value; several: the median and the range over seeds.
     let over_seeds = |value: fn(&run::Summary) -> f64| {
-        let values: Vec<f64> = ours.iter().map(|o| value(&o.summary)).collect();
+        let values: Vec<f64> = ours.iter().map(value).collect();
         let (median, lo, hi) = report::spread(&values);
         if values.len() == 1 {
             report::sci(median)
@@ -565,7 +598,6 @@ fn results_row(task: &dyn Task, ours: &[run::Outcome], fd: Option<&run::Outcome>
             )
         }
     };
-    let param: Vec<f64> = ours.iter().map(|o| o.summary.param_mse).collect();
     vec![
         task.name().to_uppercase(),
         s.samples.to_string(),
@@ -578,11 +610,11 @@ fn results_row(task: &dyn Task, ours: &[run::Outcome], fd: Option<&run::Outcome>
         cell(paper.map(|p| p.image_mse)),
         cell(paper.map(|p| p.param_mse)),
         paper.map_or("-".into(), |p| {
-            let below = param.iter().filter(|&&v| v <= p.param_mse).count();
-            format!("{below} of {}", param.len())
+            let below = ours.iter().filter(|m| m.param_mse <= p.param_mse).count();
+            format!("{below} of {}", ours.len())
         }),
-        cell(fd.map(|f| f.summary.image_mse)),
-        cell(fd.map(|f| f.summary.param_mse)),
+        cell(fd.map(|f| f.image_mse)),
+        cell(fd.map(|f| f.param_mse)),
         cell(paper.map(|p| p.mitsuba_param_mse)),
         format!("{:.3}", s.seconds_per_iteration),
         paper.map_or("-".into(), |p| format!("{:.2}", p.seconds_per_iteration)),

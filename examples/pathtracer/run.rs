@@ -12,14 +12,14 @@ use plateau::baseline::{FiniteDifference, Spsa};
 use plateau::{
     Adam, Annealer, GradientEstimator, Optimizer, PlateauFreeGradient, Sampling, Seeded,
 };
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::render::Image;
 use crate::report::{self, Axes, Result, Scale, Series};
 use crate::tasks::{param_mse, Task, View};
 
 /// How the gradient is obtained.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
     /// The plateau-free gradient (the paper's method).
@@ -31,7 +31,7 @@ pub enum Method {
 }
 
 /// The sampler, as named on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum SamplerArg {
     Radial,
@@ -50,7 +50,7 @@ impl From<SamplerArg> for Sampling {
 }
 
 /// Which renderer seed each evaluation uses.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Crn {
     /// Every render, the reference included, uses the run's seed: the loss is a
@@ -149,7 +149,7 @@ pub struct Row {
 }
 
 /// `summary.json`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Summary {
     pub task: String,
     pub method: Method,
