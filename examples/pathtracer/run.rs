@@ -337,12 +337,12 @@ pub fn optimize(
 
 /// Settings that fit a run into `budget` seconds, and a line saying what was chosen.
 ///
-/// The cost model is the one measured by `experiment tradeoff`: an iteration costs N renders,
-/// and a render's time is proportional to spp times pixels. The same study found the final
-/// error far less sensitive to spp and resolution (down to a quarter of the pixels) than to the
-/// number of iterations, which sets the order of the cuts: keep the iterations (the annealing
-/// schedule needs them), lower the resolution and then spp to fit, and cut iterations only
-/// when even a quarter of the pixels at 4 spp does not fit. The loop also stops at the budget.
+/// The cost model: an iteration costs N renders, and a render's time is proportional to spp
+/// times pixels (`experiment tradeoff` measures both exponents). The order of the cuts keeps
+/// the iterations, which the annealing schedule needs, and lowers the resolution and then spp
+/// first; iterations are cut only when even a quarter of the pixels at 4 spp does not fit.
+/// That order is a design choice to be checked against the trade-off study's error
+/// measurements. The loop also stops when the budget is spent.
 pub fn plan_for_budget(task: &dyn Task, s: &Settings, budget: f64) -> (Settings, String) {
     let view = s.view();
     // One warm-up render (caches, thread pool), then the timed one.
