@@ -924,7 +924,6 @@ mod tests {
             "fig3.png",
             "fig4/convergence.png",
             "tradeoff_shadow.png",
-            "tradeoff_gi.png",
         ] {
             assert!(out.join(plot).exists(), "{plot}");
         }
