@@ -66,18 +66,9 @@ impl<F: Objective> GradientEstimator for FiniteDifference<F> {
         let mut mean_value = 0.0;
         for i in 0..n {
             let seed = stream_seed(self.seed, index, i as u64);
-            let side = |x: f64, sample: usize, point: &mut Vec<f64>| -> Result<f64, Error> {
+            let side = |x: f64, sample: usize, point: &mut Vec<f64>| {
                 point[i] = x;
-                let v = self.objective.evaluate(point, seed);
-                if v.is_finite() {
-                    Ok(v)
-                } else {
-                    Err(Error::NonFiniteValue {
-                        sample,
-                        value: v,
-                        point: point.clone(),
-                    })
-                }
+                evaluate_finite(&self.objective, point, seed, sample)
             };
             let plus = side(theta[i] + h, 2 * i, &mut self.point)?;
             let minus = side(theta[i] - h, 2 * i + 1, &mut self.point)?;
@@ -85,12 +76,7 @@ impl<F: Objective> GradientEstimator for FiniteDifference<F> {
             gradient[i] = (0.5 * plus - 0.5 * minus) / h;
             mean_value += (plus + minus) / (2 * n) as f64;
         }
-        if let Some(index) = gradient.iter().position(|g| !g.is_finite()) {
-            return Err(Error::NonFiniteGradient {
-                index,
-                value: gradient[index],
-            });
-        }
+        check_gradient(&gradient)?;
         Ok(Estimate {
             gradient,
             evaluations: 2 * n,
@@ -164,28 +150,45 @@ impl<F: Objective> GradientEstimator for Spsa<F> {
         let seed = stream_seed(self.seed, index, 1);
         let mut values = [0.0; 2];
         for (k, v) in values.iter_mut().enumerate() {
-            let point = &self.points[k * n..(k + 1) * n];
-            *v = self.objective.evaluate(point, seed);
-            if !v.is_finite() {
-                return Err(Error::NonFiniteValue {
-                    sample: k,
-                    value: *v,
-                    point: point.to_vec(),
-                });
-            }
+            *v = evaluate_finite(&self.objective, &self.points[k * n..(k + 1) * n], seed, k)?;
         }
         let half_diff = 0.5 * values[0] - 0.5 * values[1];
         let gradient: Vec<f64> = delta.iter().map(|d| half_diff / (sigma * d)).collect();
-        if let Some(index) = gradient.iter().position(|g| !g.is_finite()) {
-            return Err(Error::NonFiniteGradient {
-                index,
-                value: gradient[index],
-            });
-        }
+        check_gradient(&gradient)?;
         Ok(Estimate {
             gradient,
             evaluations: 2,
             mean_value: 0.5 * values[0] + 0.5 * values[1],
         })
+    }
+}
+
+/// `f(point)`, or the error that names evaluation `sample` and its point.
+fn evaluate_finite<F: Objective>(
+    f: &F,
+    point: &[f64],
+    seed: u64,
+    sample: usize,
+) -> Result<f64, Error> {
+    let value = f.evaluate(point, seed);
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Error::NonFiniteValue {
+            sample,
+            value,
+            point: point.to_vec(),
+        })
+    }
+}
+
+/// An overflowed gradient is an error, never an infinity handed to the optimiser.
+fn check_gradient(gradient: &[f64]) -> Result<(), Error> {
+    match gradient.iter().position(|g| !g.is_finite()) {
+        Some(index) => Err(Error::NonFiniteGradient {
+            index,
+            value: gradient[index],
+        }),
+        None => Ok(()),
     }
 }
