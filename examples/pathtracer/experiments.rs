@@ -287,8 +287,8 @@ fn fig1(opts: &Options) -> Result<()> {
             "N",
             "s/iteration",
             "of which rendering",
-            "estimator + Adam (s)",
-            "estimator + Adam share",
+            "everything else (s)",
+            "everything else, share",
         ],
         &rows,
     ));
