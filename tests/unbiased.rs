@@ -148,6 +148,31 @@ fn exact_setups(samples: usize, antithetic: bool, orthogonal: bool) -> Vec<Setup
         .collect()
 }
 
+/// `check` for every configuration exact for `f`: the radial and Gaussian samplers, and the
+/// per-coordinate one too where it is exact (`n = 1`, separable `f`).
+#[allow(clippy::too_many_arguments)]
+fn check_exact<F: Fn(&[f64]) -> f64>(
+    f: F,
+    (samples, antithetic, orthogonal): (usize, bool, bool),
+    per_coordinate_exact: bool,
+    theta: &[f64],
+    spreads: &[f64],
+    truth: &[f64],
+    seed: u64,
+) -> Result<(), String> {
+    let mut setups = exact_setups(samples, antithetic, orthogonal);
+    if per_coordinate_exact {
+        setups.push(Setup {
+            sampling: Sampling::PerCoordinate,
+            orthogonal: false,
+            ..setups[0]
+        });
+    }
+    setups
+        .into_iter()
+        .try_for_each(|setup| check(&f, setup, theta, spreads, truth, seed))
+}
+
 /// `(samples, antithetic, orthogonal)`.
 fn options() -> impl Strategy<Value = (usize, bool, bool)> {
     (
@@ -293,12 +318,8 @@ proptest! {
             ax + dot(b, x)
         };
         let truth = quadratic_grad(a, b, &theta);
-        let mut setups = exact_setups(samples, antithetic, orthogonal);
-        setups.push(Setup { orthogonal: false, ..Setup { sampling: Sampling::PerCoordinate, ..setups[0] } });
-        for setup in setups {
-            let r = check(f, setup, &theta, &spreads, &truth, seed);
-            prop_assert!(r.is_ok(), "{}", r.unwrap_err());
-        }
+        let r = check_exact(f, (samples, antithetic, orthogonal), true, &theta, &spreads, &truth, seed);
+        prop_assert!(r.is_ok(), "{}", r.unwrap_err());
     }
 
     /// `exp(a.x)`, with `|a| <= 1` so that the estimator's variance (which grows like
@@ -333,14 +354,8 @@ proptest! {
         let a = &a[..n];
         let f = |x: &[f64]| x.iter().zip(a).map(|(xi, ai)| (ai * xi).sin()).product::<f64>();
         let truth = sines_grad(a, &theta, &spreads);
-        let mut setups = exact_setups(samples, antithetic, orthogonal);
-        if n == 1 {
-            setups.push(Setup { sampling: Sampling::PerCoordinate, orthogonal: false, ..setups[0] });
-        }
-        for setup in setups {
-            let r = check(f, setup, &theta, &spreads, &truth, seed);
-            prop_assert!(r.is_ok(), "{}", r.unwrap_err());
-        }
+        let r = check_exact(f, (samples, antithetic, orthogonal), n == 1, &theta, &spreads, &truth, seed);
+        prop_assert!(r.is_ok(), "{}", r.unwrap_err());
     }
 
     /// The canonical plateau `1[a.x > b]`, placed so that theta is within two smoothed
@@ -361,14 +376,8 @@ proptest! {
         let b = dot(&a, &theta) - m * big_s;
         let f = |x: &[f64]| if dot(&a, x) > b { 1.0 } else { 0.0 };
         let truth = step_grad(&a, b, &theta, &spreads);
-        let mut setups = exact_setups(samples, antithetic, orthogonal);
-        if n == 1 {
-            setups.push(Setup { sampling: Sampling::PerCoordinate, orthogonal: false, ..setups[0] });
-        }
-        for setup in setups {
-            let r = check(f, setup, &theta, &spreads, &truth, seed);
-            prop_assert!(r.is_ok(), "{}", r.unwrap_err());
-        }
+        let r = check_exact(f, (samples, antithetic, orthogonal), n == 1, &theta, &spreads, &truth, seed);
+        prop_assert!(r.is_ok(), "{}", r.unwrap_err());
     }
 
     /// `max(a.x - b, 0)`, the kink of a plateau's edge.
@@ -387,14 +396,8 @@ proptest! {
         let b = dot(&a, &theta) - m * big_s;
         let f = |x: &[f64]| (dot(&a, x) - b).max(0.0);
         let truth = relu_grad(&a, b, &theta, &spreads);
-        let mut setups = exact_setups(samples, antithetic, orthogonal);
-        if n == 1 {
-            setups.push(Setup { sampling: Sampling::PerCoordinate, orthogonal: false, ..setups[0] });
-        }
-        for setup in setups {
-            let r = check(f, setup, &theta, &spreads, &truth, seed);
-            prop_assert!(r.is_ok(), "{}", r.unwrap_err());
-        }
+        let r = check_exact(f, (samples, antithetic, orthogonal), n == 1, &theta, &spreads, &truth, seed);
+        prop_assert!(r.is_ok(), "{}", r.unwrap_err());
     }
 
     /// A box indicator. Coordinate 0's edges are at -1 to 3 spreads from theta, so theta may
@@ -417,14 +420,8 @@ proptest! {
         u[0] = l[0] + width0 * spreads[0];
         let f = |x: &[f64]| in_box(&l, &u, x);
         let truth = box_grad(&l, &u, &theta, &spreads);
-        let mut setups = exact_setups(samples, antithetic, orthogonal);
-        if n == 1 {
-            setups.push(Setup { sampling: Sampling::PerCoordinate, orthogonal: false, ..setups[0] });
-        }
-        for setup in setups {
-            let r = check(f, setup, &theta, &spreads, &truth, seed);
-            prop_assert!(r.is_ok(), "{}", r.unwrap_err());
-        }
+        let r = check_exact(f, (samples, antithetic, orthogonal), n == 1, &theta, &spreads, &truth, seed);
+        prop_assert!(r.is_ok(), "{}", r.unwrap_err());
     }
 
     /// `|x|` in one dimension: `d/dx E|x + tau| = 2 Phi(x / s) - 1`. All three samplers.
