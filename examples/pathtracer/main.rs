@@ -164,6 +164,10 @@ enum Command {
         /// Seeds per point where the outcome is noisy (default: the experiment's own).
         #[arg(long)]
         seeds: Option<u64>,
+        /// Reuse runs in `<out>/runs/` made by an earlier build with the same settings (to
+        /// rewrite pages after a change that cannot alter a run; timings are the earlier ones).
+        #[arg(long)]
+        reuse_runs: bool,
         #[arg(long)]
         threads: Option<usize>,
     },
@@ -441,6 +445,7 @@ fn run_cli(cli: Cli) -> Result<()> {
             out,
             tasks,
             seeds,
+            reuse_runs,
             threads,
         } => with_threads(threads, || {
             experiments::run(
@@ -450,6 +455,7 @@ fn run_cli(cli: Cli) -> Result<()> {
                     out,
                     tasks,
                     seeds,
+                    reuse_runs,
                 },
             )
         }),

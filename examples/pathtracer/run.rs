@@ -135,7 +135,7 @@ impl Settings {
 }
 
 /// One row of `history.csv`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Row {
     pub iteration: usize,
     pub sigma: f64,
@@ -187,6 +187,7 @@ pub struct Summary {
 }
 
 /// The result of a run.
+#[derive(Serialize, Deserialize)]
 pub struct Outcome {
     pub summary: Summary,
     pub history: Vec<Row>,
