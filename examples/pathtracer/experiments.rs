@@ -665,6 +665,25 @@ fn fig4(opts: &Options) -> Result<()> {
             &[vec!["start".into(), sci(m.initial_image_mse), sci(m.initial_param_mse)], vec!["end".into(), sci(m.image_mse), sci(m.param_mse)]]
         )
     );
+    // Whether the run was still improving: the parameter error over its last tenth.
+    let tail = o.history.len() - o.history.len() / 10;
+    let before = o
+        .history
+        .get(tail.saturating_sub(1))
+        .map_or(f64::NAN, |r| r.param_mse);
+    let body = format!(
+        "{body}\nOver the run the image MSE fell {:.1}x and the parameter MSE {:.1}x; over its last tenth the parameter MSE changed by {:+.1} % (from {} to {}): {}.\n",
+        m.initial_image_mse / m.image_mse,
+        m.initial_param_mse / m.param_mse,
+        100.0 * (m.param_mse / before - 1.0),
+        sci(before),
+        sci(m.param_mse),
+        if m.param_mse < 0.99 * before {
+            "still falling, so more iterations would go on improving it"
+        } else {
+            "levelled off"
+        }
+    );
     write_page(
         opts,
         "fig4",
