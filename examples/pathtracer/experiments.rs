@@ -1106,6 +1106,36 @@ fn gradient_quality(opts: &Options) -> Result<()> {
 mod tests {
     use super::*;
 
+    #[test]
+    fn pareto_front_keeps_only_undominated_points() {
+        // (seconds, error): 1 is beaten by 0 (faster and better), 4 is not finite.
+        let points = [
+            (1.0, 0.5),
+            (2.0, 0.6),
+            (3.0, 0.1),
+            (0.5, 0.9),
+            (4.0, f64::NAN),
+            (5.0, 0.05),
+        ];
+        assert_eq!(pareto(&points), vec![3, 0, 2, 5]);
+    }
+
+    #[test]
+    fn fit_line_recovers_slope_and_intercept() {
+        let points: Vec<(f64, f64)> = (0..5).map(|i| (i as f64, 0.25 + 1.5 * i as f64)).collect();
+        let (a, b) = fit_line(&points);
+        assert!(
+            (a - 0.25).abs() < 1e-12 && (b - 1.5).abs() < 1e-12,
+            "{a} {b}"
+        );
+        // A cost that grows as x^0.9 gives exponent 0.9 in log-log.
+        let power: Vec<(f64, f64)> = [2.0f64, 4.0, 8.0, 16.0]
+            .iter()
+            .map(|&x| (x.ln(), (0.07 * x.powf(0.9)).ln()))
+            .collect();
+        assert!((fit_line(&power).1 - 0.9).abs() < 1e-12);
+    }
+
     /// A second identical run is read back (its measured seconds are the first run's, which a
     /// new run would not repeat); another setting is a new run.
     #[test]
