@@ -250,6 +250,17 @@ fn margin(a: &[f64], b: f64, x: &[f64], s: &[f64]) -> (f64, f64) {
     (big_s, (dot(a, x) - b) / big_s)
 }
 
+/// The plane `a.x = b` for a property test: `a` cut to theta's dimension with its first
+/// coordinate kept away from 0 (so the plane is never parallel to all but a vanishing
+/// direction), and `b` placed `m` smoothed widths from theta.
+fn plane(a: &[f64], m: f64, theta: &[f64], spreads: &[f64]) -> (Vec<f64>, f64) {
+    let mut a = a[..theta.len()].to_vec();
+    a[0] = if a[0] >= 0.0 { a[0] + 0.2 } else { a[0] - 0.2 };
+    let (big_s, _) = margin(&a, 0.0, theta, spreads);
+    let b = dot(&a, theta) - m * big_s;
+    (a, b)
+}
+
 /// `1[a.x > b]`: smoothed `Phi(m)`, gradient `a phi(m) / S`.
 fn step_grad(a: &[f64], b: f64, x: &[f64], s: &[f64]) -> Vec<f64> {
     let (big_s, m) = margin(a, b, x, s);
@@ -354,7 +365,7 @@ proptest! {
         let a = &a[..n];
         let f = |x: &[f64]| x.iter().zip(a).map(|(xi, ai)| (ai * xi).sin()).product::<f64>();
         let truth = sines_grad(a, &theta, &spreads);
-        let r = check_exact(f, (samples, antithetic, orthogonal), n == 1, &theta, &spreads, &truth, seed);
+        let r = check_exact(f, (samples, antithetic, orthogonal), theta.len() == 1, &theta, &spreads, &truth, seed);
         prop_assert!(r.is_ok(), "{}", r.unwrap_err());
     }
 
@@ -369,14 +380,10 @@ proptest! {
         (samples, antithetic, orthogonal) in options(),
         seed in any::<u64>(),
     ) {
-        let n = theta.len();
-        let mut a = a[..n].to_vec();
-        a[0] = if a[0] >= 0.0 { a[0] + 0.2 } else { a[0] - 0.2 };
-        let (big_s, _) = margin(&a, 0.0, &theta, &spreads);
-        let b = dot(&a, &theta) - m * big_s;
+        let (a, b) = plane(&a, m, &theta, &spreads);
         let f = |x: &[f64]| if dot(&a, x) > b { 1.0 } else { 0.0 };
         let truth = step_grad(&a, b, &theta, &spreads);
-        let r = check_exact(f, (samples, antithetic, orthogonal), n == 1, &theta, &spreads, &truth, seed);
+        let r = check_exact(f, (samples, antithetic, orthogonal), theta.len() == 1, &theta, &spreads, &truth, seed);
         prop_assert!(r.is_ok(), "{}", r.unwrap_err());
     }
 
@@ -389,14 +396,10 @@ proptest! {
         (samples, antithetic, orthogonal) in options(),
         seed in any::<u64>(),
     ) {
-        let n = theta.len();
-        let mut a = a[..n].to_vec();
-        a[0] = if a[0] >= 0.0 { a[0] + 0.2 } else { a[0] - 0.2 };
-        let (big_s, _) = margin(&a, 0.0, &theta, &spreads);
-        let b = dot(&a, &theta) - m * big_s;
+        let (a, b) = plane(&a, m, &theta, &spreads);
         let f = |x: &[f64]| (dot(&a, x) - b).max(0.0);
         let truth = relu_grad(&a, b, &theta, &spreads);
-        let r = check_exact(f, (samples, antithetic, orthogonal), n == 1, &theta, &spreads, &truth, seed);
+        let r = check_exact(f, (samples, antithetic, orthogonal), theta.len() == 1, &theta, &spreads, &truth, seed);
         prop_assert!(r.is_ok(), "{}", r.unwrap_err());
     }
 
@@ -420,7 +423,7 @@ proptest! {
         u[0] = l[0] + width0 * spreads[0];
         let f = |x: &[f64]| in_box(&l, &u, x);
         let truth = box_grad(&l, &u, &theta, &spreads);
-        let r = check_exact(f, (samples, antithetic, orthogonal), n == 1, &theta, &spreads, &truth, seed);
+        let r = check_exact(f, (samples, antithetic, orthogonal), theta.len() == 1, &theta, &spreads, &truth, seed);
         prop_assert!(r.is_ok(), "{}", r.unwrap_err());
     }
 
