@@ -883,6 +883,7 @@ fn tradeoff(opts: &Options) -> Result<()> {
             configs.push((format!("{sampler:?}").to_lowercase(), s));
         }
         let mut results = Vec::new();
+        let mut ran = Vec::new();
         for (label, mut s) in configs {
             if opts.quick {
                 s.iterations = (s.iterations / 20).max(30);
@@ -892,6 +893,7 @@ fn tradeoff(opts: &Options) -> Result<()> {
             let o = quiet(opts, t.as_ref(), &s)?;
             csv.push(summary_csv_row(&o, std::slice::from_ref(&label)));
             results.push((label, o.summary));
+            ran.push(s);
         }
         let points: Vec<(f64, f64)> = results
             .iter()
@@ -952,11 +954,16 @@ fn tradeoff(opts: &Options) -> Result<()> {
             .iter()
             .find(|(l, _)| *l == format!("N={}", base.samples))
             .map_or(f64::NAN, |(_, m)| m.seconds_total);
-        let fastest = results
-            .iter()
-            .filter(|(_, m)| m.param_mse <= paper)
-            .min_by(|a, b| a.1.seconds_total.total_cmp(&b.1.seconds_total));
-        let verdict = fastest.map_or_else(
+        let fastest_index = (0..results.len())
+            .filter(|&i| results[i].1.param_mse <= paper)
+            .min_by(|&a, &b| {
+                results[a]
+                    .1
+                    .seconds_total
+                    .total_cmp(&results[b].1.seconds_total)
+            });
+        let fastest = fastest_index.map(|i| &results[i]);
+        let mut verdict = fastest.map_or_else(
             || format!("No run ended at or below the paper's parameter MSE ({}).", sci(paper)),
             |(label, m)| {
                 format!(
@@ -968,6 +975,44 @@ fn tradeoff(opts: &Options) -> Result<()> {
                 )
             },
         );
+        // One seed can be lucky: the fastest converging settings and the defaults again over
+        // several seeds (the sweep's seed-0 runs are reused).
+        if let Some(i) = fastest_index {
+            let default_index = results
+                .iter()
+                .position(|(l, _)| *l == format!("N={}", base.samples));
+            let mut checks = vec![(results[i].0.clone(), ran[i].clone())];
+            if let Some(d) = default_index.filter(|&d| d != i) {
+                checks.push(("defaults".to_string(), ran[d].clone()));
+            }
+            let seeds = opts.seeds(5);
+            let mut parts = Vec::new();
+            for (label, settings) in checks {
+                let mut finals = Vec::new();
+                for &seed in &seeds {
+                    let mut s = settings.clone();
+                    s.seed = seed;
+                    let o = quiet(opts, t.as_ref(), &s)?;
+                    csv.push(summary_csv_row(&o, &[format!("seeds: {label}")]));
+                    finals.push(o.summary.param_mse);
+                }
+                let good = finals.iter().filter(|&&m| m <= paper).count();
+                let (median, lo, hi) = spread(&finals);
+                parts.push(format!(
+                    "{label}: {good} of {} at or below it (median {}, range [{}, {}])",
+                    finals.len(),
+                    sci(median),
+                    sci(lo),
+                    sci(hi)
+                ));
+            }
+            let _ = write!(
+                verdict,
+                " Over seeds 0 to {}: {}.",
+                seeds.len() - 1,
+                parts.join("; ")
+            );
+        }
         let _ = write!(
             body,
             "## {}\n\n![tradeoff](tradeoff_{name}.png)\n\n{}\nCost per iteration grows as N^{e_n:.2}, spp^{e_spp:.2} and pixels^{e_px:.2} (least-squares slopes in log-log over the one-factor sweeps).\n\n{verdict}\n\n",
