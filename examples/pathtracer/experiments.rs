@@ -976,7 +976,7 @@ fn tradeoff(opts: &Options) -> Result<()> {
             },
         );
         // One seed can be lucky: the fastest converging settings and the defaults again over
-        // several seeds (the sweep's seed-0 runs are reused).
+        // three seeds (the sweep's seed-0 runs are reused).
         if let Some(i) = fastest_index {
             let default_index = results
                 .iter()
@@ -985,7 +985,7 @@ fn tradeoff(opts: &Options) -> Result<()> {
             if let Some(d) = default_index.filter(|&d| d != i) {
                 checks.push(("defaults".to_string(), ran[d].clone()));
             }
-            let seeds = opts.seeds(5);
+            let seeds = opts.seeds(3);
             let mut parts = Vec::new();
             for (label, settings) in checks {
                 let mut finals = Vec::new();
