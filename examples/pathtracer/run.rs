@@ -530,7 +530,7 @@ mod tests {
         assert_eq!(pick(0.25 * 0.25 / 8.0), (0.25, 4, 400));
         let (scale, spp, iterations) = pick(0.001);
         assert_eq!((scale, spp), (0.25, 4));
-        assert!(iterations < 400 && iterations >= 1);
+        assert!((1..400).contains(&iterations));
         for fraction in [0.9, 0.3, 0.1, 0.02, 0.005, 0.001] {
             let (p, _) = plan_with_render_time(0.1, &s, fraction * full);
             let predicted = 0.1
