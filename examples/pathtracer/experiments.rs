@@ -375,8 +375,30 @@ fn fig1(opts: &Options) -> Result<()> {
 // ---------------------------------------------------------------------------------------
 // Fig. 2: convergence against N.
 
-/// The parameter MSE at which Fig. 2 counts a SHADOW run as having found the target.
-const REACHED: f64 = 1e-3;
+/// Parameter MSEs at which Fig. 2 times a SHADOW run: 1e-2 is reached while sigma is still
+/// sigma0 (the smoothed optimum lies near 5e-3), 1e-3 mostly once sigma anneals.
+const REACHED: [f64; 2] = [1e-2, 1e-3];
+
+/// "k of S runs; median iteration I, median T s" for the first row of each run's history at
+/// or below `threshold`.
+fn time_to_reach(histories: &[Vec<run::Row>], threshold: f64) -> String {
+    let hits: Vec<&run::Row> = histories
+        .iter()
+        .filter_map(|h| h.iter().find(|r| r.param_mse <= threshold))
+        .collect();
+    if hits.is_empty() {
+        return format!("0 of {}", histories.len());
+    }
+    let iterations: Vec<f64> = hits.iter().map(|r| r.iteration as f64).collect();
+    let seconds: Vec<f64> = hits.iter().map(|r| r.seconds).collect();
+    format!(
+        "{} of {}: iteration {:.0}, {:.1} s",
+        hits.len(),
+        histories.len(),
+        spread(&iterations).0,
+        spread(&seconds).0
+    )
+}
 
 fn fig2(opts: &Options) -> Result<()> {
     let shadow = task("shadow")?;
@@ -386,7 +408,7 @@ fn fig2(opts: &Options) -> Result<()> {
     let mut csv = Vec::new();
     for n in [2usize, 4, 8, 16] {
         let mut finals = Vec::new();
-        let mut reach = Vec::new();
+        let mut histories = Vec::new();
         let mut curves: Vec<Vec<f64>> = Vec::new();
         for &seed in &seeds {
             let mut s = Settings::defaults(shadow.as_ref());
@@ -395,12 +417,6 @@ fn fig2(opts: &Options) -> Result<()> {
             opts.shrink(&mut s, 40);
             let o = quiet(opts, shadow.as_ref(), &s)?;
             finals.push(o.summary.param_mse);
-            reach.push(
-                o.history
-                    .iter()
-                    .find(|r| r.param_mse <= REACHED)
-                    .map_or((f64::NAN, f64::NAN), |r| (r.iteration as f64, r.seconds)),
-            );
             curves.push(o.history.iter().map(|r| r.param_mse).collect());
             for r in &o.history {
                 csv.push(vec![
@@ -412,6 +428,7 @@ fn fig2(opts: &Options) -> Result<()> {
                     format!("{:.4}", r.seconds),
                 ]);
             }
+            histories.push(o.history);
         }
         let len = curves.iter().map(Vec::len).min().unwrap_or(0);
         let median: Vec<(f64, f64)> = (0..len)
@@ -424,32 +441,12 @@ fn fig2(opts: &Options) -> Result<()> {
             .collect();
         series.push(Series::line(format!("N = {n}"), median));
         let (m, lo, hi) = spread(&finals);
-        let reached = reach.iter().filter(|r| r.0.is_finite()).count();
-        let iterations: Vec<f64> = reach
-            .iter()
-            .map(|r| r.0)
-            .filter(|x| x.is_finite())
-            .collect();
-        let seconds: Vec<f64> = reach
-            .iter()
-            .map(|r| r.1)
-            .filter(|x| x.is_finite())
-            .collect();
         rows.push(vec![
             n.to_string(),
             sci(m),
             format!("[{}, {}]", sci(lo), sci(hi)),
-            format!("{reached} of {}", seeds.len()),
-            if reached > 0 {
-                format!("{:.0}", spread(&iterations).0)
-            } else {
-                "-".into()
-            },
-            if reached > 0 {
-                format!("{:.1}", spread(&seconds).0)
-            } else {
-                "-".into()
-            },
+            time_to_reach(&histories, REACHED[0]),
+            time_to_reach(&histories, REACHED[1]),
         ]);
     }
     report::write_csv(
@@ -477,13 +474,12 @@ fn fig2(opts: &Options) -> Result<()> {
             "N",
             "final parameter MSE (median)",
             "[min, max] over seeds",
-            "runs reaching 1e-3",
-            "iterations to 1e-3 (median)",
-            "seconds to 1e-3 (median)",
+            "runs reaching 1e-2: median iteration, seconds",
+            "runs reaching 1e-3: median iteration, seconds",
         ],
         &rows,
     ));
-    body.push_str("\nA run \"reaches 1e-3\" at the first iteration whose parameter MSE is at most 1e-3; its seconds are optimisation time on this machine, so they weigh faster convergence against N renders per iteration (Fig. 1).\n");
+    body.push_str("\nA run reaches 1e-2 (or 1e-3) at the first iteration whose parameter MSE is at most that; its seconds are optimisation time on this machine, so they weigh faster convergence against N renders per iteration (Fig. 1). On SHADOW the error levels off near 5e-3 while sigma stays at sigma0 = 0.5 (the first half of the run: the minimum of the smoothed loss lies there, not at the target) and falls far below 1e-3 once sigma anneals; so 1e-2 measures how N speeds up the descent, 1e-3 mostly when annealing begins.\n");
     body.push_str(
         "\nPaper (supplemental Sec. 2): parameter MSE 9.5e-5 at N = 2 and 4.7e-6 at N = 16.\n",
     );
