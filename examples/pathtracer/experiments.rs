@@ -1192,18 +1192,23 @@ mod tests {
         assert!((fit_line(&power).1 - 0.9).abs() < 1e-12);
     }
 
+    /// `--quick` options writing into a fresh temporary directory named after `tag`.
+    fn quick_options(tag: &str) -> Options {
+        Options {
+            quick: true,
+            out: std::env::temp_dir().join(format!("plateau-{tag}-{}", std::process::id())),
+            tasks: None,
+            seeds: None,
+            reuse_runs: false,
+        }
+    }
+
     /// A second identical run is read back (its measured seconds are the first run's, which a
     /// new run would not repeat); another setting is a new run.
     #[test]
     fn runs_are_cached_by_settings() {
-        let out = std::env::temp_dir().join(format!("plateau-cache-{}", std::process::id()));
-        let opts = Options {
-            quick: true,
-            out: out.clone(),
-            tasks: None,
-            seeds: None,
-            reuse_runs: false,
-        };
+        let opts = quick_options("cache");
+        let out = opts.out.clone();
         let t = task("shadow").unwrap();
         let mut s = Settings::defaults(t.as_ref());
         s.iterations = 3;
@@ -1226,14 +1231,8 @@ mod tests {
     /// nothing; that the commands work from a clean checkout is the point.
     #[test]
     fn every_quick_experiment_writes_its_page_csv_and_plots() {
-        let out = std::env::temp_dir().join(format!("plateau-experiments-{}", std::process::id()));
-        let opts = Options {
-            quick: true,
-            out: out.clone(),
-            tasks: None,
-            seeds: None,
-            reuse_runs: false,
-        };
+        let opts = quick_options("experiments");
+        let out = opts.out.clone();
         use clap::ValueEnum;
         for experiment in Experiment::value_variants() {
             run(*experiment, &opts).unwrap_or_else(|e| panic!("{experiment:?}: {e}"));
