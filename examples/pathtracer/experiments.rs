@@ -961,10 +961,10 @@ fn tradeoff(opts: &Options) -> Result<()> {
             .collect();
         let paper = t.paper().map_or(f64::NAN, |p| p.param_mse);
         // The N sweep's run at the default N is the task's defaults.
-        let default_seconds = results
+        let default_index = results
             .iter()
-            .find(|(l, _)| *l == format!("N={}", base.samples))
-            .map_or(f64::NAN, |(_, m)| m.seconds_total);
+            .position(|(l, _)| *l == format!("N={}", base.samples));
+        let default_seconds = default_index.map_or(f64::NAN, |d| results[d].1.seconds_total);
         let fastest_index = (0..results.len())
             .filter(|&i| results[i].1.param_mse <= paper)
             .min_by(|&a, &b| {
@@ -989,9 +989,6 @@ fn tradeoff(opts: &Options) -> Result<()> {
         // One seed can be lucky: the fastest converging settings and the defaults again over
         // three seeds (the sweep's seed-0 runs are reused).
         if let Some(i) = fastest_index {
-            let default_index = results
-                .iter()
-                .position(|(l, _)| *l == format!("N={}", base.samples));
             let mut checks = vec![(results[i].0.clone(), ran[i].clone())];
             if let Some(d) = default_index.filter(|&d| d != i) {
                 checks.push(("defaults".to_string(), ran[d].clone()));
