@@ -690,11 +690,14 @@ fn fig4(opts: &Options) -> Result<()> {
 // ---------------------------------------------------------------------------------------
 // Table 4 and the samplers: variants on every task.
 
+/// Every variant of every wanted task, over the seeds: `[task](name, [variant][seed])`.
+/// One seed unless `--seeds` asks for more: Table 4 of the paper is one run per cell.
 fn variants_on_tasks(
     opts: &Options,
     name: &str,
     variants: &[Variant],
-) -> Result<Vec<(String, Vec<Outcome>)>> {
+) -> Result<Vec<(String, Vec<Vec<Outcome>>)>> {
+    let seeds = opts.seeds(1);
     let mut per_task = Vec::new();
     let mut csv = Vec::new();
     for t in tasks::all() {
@@ -703,12 +706,17 @@ fn variants_on_tasks(
         }
         let mut outcomes = Vec::new();
         for (label, change) in variants {
-            let mut s = Settings::defaults(t.as_ref());
-            change(&mut s);
-            opts.shrink(&mut s, 30);
-            let o = quiet(opts, t.as_ref(), &s)?;
-            csv.push(summary_csv_row(&o, &[label.to_string()]));
-            outcomes.push(o);
+            let mut runs = Vec::new();
+            for &seed in &seeds {
+                let mut s = Settings::defaults(t.as_ref());
+                change(&mut s);
+                s.seed = seed;
+                opts.shrink(&mut s, 30);
+                let o = quiet(opts, t.as_ref(), &s)?;
+                csv.push(summary_csv_row(&o, &[label.to_string()]));
+                runs.push(o);
+            }
+            outcomes.push(runs);
         }
         per_task.push((t.name().to_uppercase(), outcomes));
     }
@@ -718,6 +726,28 @@ fn variants_on_tasks(
         csv,
     )?;
     Ok(per_task)
+}
+
+/// "One seed (0) per cell." or "Seeds 0 to K-1 per cell; ...", for the pages over tasks.
+fn seeds_sentence(opts: &Options, aggregate: &str) -> String {
+    match opts.seeds(1).len() {
+        1 => "One seed (0) per cell.".into(),
+        k => format!("Seeds 0 to {} per cell; {aggregate}.", k - 1),
+    }
+}
+
+/// `value` alone for one seed, `value [min, max]` for several.
+fn with_range(values: &[f64], show: impl Fn(f64) -> String) -> String {
+    let (m, lo, hi) = spread(values);
+    if values.len() > 1 {
+        format!("{} [{}, {}]", show(m), show(lo), show(hi))
+    } else {
+        show(m)
+    }
+}
+
+fn final_mse(runs: &[Outcome]) -> Vec<f64> {
+    runs.iter().map(|o| o.summary.param_mse).collect()
 }
 
 fn ablation(opts: &Options) -> Result<()> {
@@ -732,13 +762,27 @@ fn ablation(opts: &Options) -> Result<()> {
     let per_task = variants_on_tasks(opts, "ablation", &variants)?;
     let mut rows = Vec::new();
     let mut sums = vec![0.0; variants.len()];
+    let mut worse = vec![0usize; variants.len()];
     for (name, outcomes) in &per_task {
-        let full = outcomes[0].summary.param_mse;
-        let mut row = vec![name.clone(), sci(full)];
-        for (k, o) in outcomes.iter().enumerate().skip(1) {
-            let ratio = (o.summary.param_mse / full).log10();
-            sums[k] += ratio;
-            row.push(format!("{} ({:+.2})", sci(o.summary.param_mse), ratio));
+        let full = final_mse(&outcomes[0]);
+        let mut row = vec![name.clone(), with_range(&full, sci)];
+        for (k, runs) in outcomes.iter().enumerate().skip(1) {
+            // Paired by seed: the same seed draws the same renderer noise for both runs.
+            let ratios: Vec<f64> = runs
+                .iter()
+                .zip(&full)
+                .map(|(o, f)| (o.summary.param_mse / f).log10())
+                .collect();
+            let median_ratio = spread(&ratios).0;
+            sums[k] += median_ratio;
+            if median_ratio > 0.0 {
+                worse[k] += 1;
+            }
+            row.push(format!(
+                "{} ({})",
+                sci(spread(&final_mse(runs)).0),
+                with_range(&ratios, |r| format!("{r:+.2}"))
+            ));
         }
         rows.push(row);
     }
@@ -748,25 +792,36 @@ fn ablation(opts: &Options) -> Result<()> {
     rows.push(mean);
     let mut head = vec!["task", "full: param MSE"];
     head.extend(variants.iter().skip(1).map(|v| v.0));
-    let mut body = String::from("Final parameter MSE of each ablation, and in brackets log10(ablation / full): positive means the ablation is worse. \"No importance sampling\" is the Gaussian sampler; \"no antithetic\" draws N independent perturbations. One seed (0) per cell.\n\n");
+    let mut body = format!(
+        "Final parameter MSE of each ablation, and in brackets log10(ablation / full): positive means the ablation is worse. \"No importance sampling\" is the Gaussian sampler; \"no antithetic\" draws N independent perturbations. {}\n\n",
+        seeds_sentence(
+            opts,
+            "each cell shows the median parameter MSE over seeds and the median [min, max] of the per-seed log ratios (an ablation and the full method with the same seed form a pair); the mean row averages the medians"
+        )
+    );
     body.push_str(&report::markdown_table(&head, &rows));
     let worse: Vec<String> = variants
         .iter()
-        .enumerate()
+        .zip(&worse)
         .skip(1)
-        .map(|(k, v)| {
-            let count = per_task
-                .iter()
-                .filter(|(_, o)| o[k].summary.param_mse > o[0].summary.param_mse)
-                .count();
+        .map(|(v, w)| {
             format!(
-                "{}: worse than the full method on {count} of {}",
+                "{}: worse than the full method on {w} of {}",
                 v.0,
                 per_task.len()
             )
         })
         .collect();
-    let _ = writeln!(body, "\n{}.", worse.join("; "));
+    let _ = writeln!(
+        body,
+        "\n{}{}.",
+        worse.join("; "),
+        if opts.seeds(1).len() > 1 {
+            " (by the median log ratio)"
+        } else {
+            ""
+        }
+    );
     write_page(
         opts,
         "ablation",
@@ -782,41 +837,57 @@ fn samplers(opts: &Options) -> Result<()> {
         ("gaussian", |s| s.sampling = SamplerArg::Gaussian),
     ];
     let per_task = variants_on_tasks(opts, "samplers", &variants)?;
+    let seeds = opts.seeds(1).len();
     let mut rows = Vec::new();
+    let mut wins = vec![0usize; variants.len()];
     for (name, outcomes) in &per_task {
-        // Error at equal time: each sampler's parameter MSE when the fastest run ended.
-        let budget = outcomes
-            .iter()
-            .map(|o| o.summary.seconds_total)
-            .fold(f64::INFINITY, f64::min);
+        // Error at equal time: each sampler's parameter MSE when the fastest of the three
+        // runs with the same seed ended.
+        let budgets: Vec<f64> = (0..seeds)
+            .map(|i| {
+                outcomes
+                    .iter()
+                    .map(|runs| runs[i].summary.seconds_total)
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect();
         let mut row = vec![name.clone()];
-        for o in outcomes {
-            let at_budget = o
-                .history
+        let mut medians = Vec::new();
+        for runs in outcomes {
+            let at_budget: Vec<f64> = runs
                 .iter()
-                .take_while(|r| r.seconds <= budget)
-                .last()
-                .map_or(f64::NAN, |r| r.param_mse);
-            row.push(format!("{} / {}", sci(o.summary.param_mse), sci(at_budget)));
+                .zip(&budgets)
+                .map(|(o, &budget)| {
+                    o.history
+                        .iter()
+                        .take_while(|r| r.seconds <= budget)
+                        .last()
+                        .map_or(f64::NAN, |r| r.param_mse)
+                })
+                .collect();
+            let finals = final_mse(runs);
+            medians.push(spread(&finals).0);
+            row.push(format!(
+                "{} / {}",
+                with_range(&finals, sci),
+                sci(spread(&at_budget).0)
+            ));
+        }
+        if let Some(b) = (0..medians.len()).min_by(|&a, &b| medians[a].total_cmp(&medians[b])) {
+            wins[b] += 1;
         }
         rows.push(row);
     }
     let mut head = vec!["task"];
     head.extend(variants.iter().map(|v| v.0));
-    let mut body = String::from("Each cell: final parameter MSE / parameter MSE at the time the fastest of the three runs finished (equal time). One seed (0) per cell.\n\n");
+    let mut body = format!(
+        "Each cell: final parameter MSE / parameter MSE at the time the fastest of the three runs finished (equal time). {}\n\n",
+        seeds_sentence(
+            opts,
+            "each cell shows the median final MSE [min, max] over seeds / the median at equal time; wins are counted by the median"
+        )
+    );
     body.push_str(&report::markdown_table(&head, &rows));
-    let mut wins = vec![0usize; variants.len()];
-    for (_, outcomes) in &per_task {
-        let best = (0..outcomes.len()).min_by(|&a, &b| {
-            outcomes[a]
-                .summary
-                .param_mse
-                .total_cmp(&outcomes[b].summary.param_mse)
-        });
-        if let Some(b) = best {
-            wins[b] += 1;
-        }
-    }
     let wins: Vec<String> = variants
         .iter()
         .zip(&wins)
@@ -832,10 +903,13 @@ fn samplers(opts: &Options) -> Result<()> {
     let spread_of_cost = per_task
         .iter()
         .map(|(_, o)| {
-            let (lo, hi) = o.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), o| {
-                let t = o.summary.seconds_per_iteration;
-                (lo.min(t), hi.max(t))
-            });
+            let (lo, hi) = o
+                .iter()
+                .flatten()
+                .fold((f64::INFINITY, 0.0f64), |(lo, hi), o| {
+                    let t = o.summary.seconds_per_iteration;
+                    (lo.min(t), hi.max(t))
+                });
             hi / lo - 1.0
         })
         .fold(0.0f64, f64::max);
@@ -1221,6 +1295,28 @@ mod tests {
         assert_ne!(first.summary.seconds_total, other.summary.seconds_total);
         assert_eq!(fs::read_dir(out.join("runs")).unwrap().count(), 2);
         let _ = fs::remove_dir_all(&out);
+    }
+
+    /// With several seeds the pages over tasks pair the runs by seed and show each cell's
+    /// range; every seed is a run of its own, in the CSV.
+    #[test]
+    fn ablation_and_samplers_over_seeds_show_the_spread() {
+        let mut opts = quick_options("seeds");
+        opts.seeds = Some(2);
+        opts.tasks = Some(vec!["cup".into()]);
+        run(Experiment::Ablation, &opts).unwrap();
+        run(Experiment::Samplers, &opts).unwrap();
+        let ablation = fs::read_to_string(opts.out.join("ablation.md")).unwrap();
+        assert!(ablation.contains("Seeds 0 to 1 per cell"), "{ablation}");
+        assert!(ablation.contains("--seeds 2 --tasks cup"), "{ablation}");
+        let cup = ablation.lines().find(|l| l.starts_with("| CUP")).unwrap();
+        // The full method's range and one ratio range per ablation.
+        assert_eq!(cup.matches('[').count(), 4, "{cup}");
+        let csv = fs::read_to_string(opts.out.join("ablation.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 1 + 4 * 2);
+        let samplers = fs::read_to_string(opts.out.join("samplers.md")).unwrap();
+        assert!(samplers.contains("tasks won out of 1"), "{samplers}");
+        let _ = fs::remove_dir_all(&opts.out);
     }
 
     /// CI's smoke test of every experiment command: the `--quick` variant of each writes its
