@@ -750,6 +750,21 @@ fn final_mse(runs: &[Outcome]) -> Vec<f64> {
     runs.iter().map(|o| o.summary.param_mse).collect()
 }
 
+/// Final errors within this many decades of each other count as a tie: one seed is not
+/// enough to tell a few per cent apart.
+const TIE_DECADES: f64 = 0.1;
+
+/// 0 (worse), 1 (about equal) or 2 (better) for `log10(ablation / full)`.
+fn verdict(log_ratio: f64) -> usize {
+    if log_ratio > TIE_DECADES {
+        0
+    } else if log_ratio >= -TIE_DECADES {
+        1
+    } else {
+        2
+    }
+}
+
 fn ablation(opts: &Options) -> Result<()> {
     let variants: [Variant; 4] = [
         ("full", |_| {}),
@@ -762,7 +777,8 @@ fn ablation(opts: &Options) -> Result<()> {
     let per_task = variants_on_tasks(opts, "ablation", &variants)?;
     let mut rows = Vec::new();
     let mut sums = vec![0.0; variants.len()];
-    let mut worse = vec![0usize; variants.len()];
+    // [worse, about equal, better] per ablation.
+    let mut verdicts = vec![[0usize; 3]; variants.len()];
     for (name, outcomes) in &per_task {
         let full = final_mse(&outcomes[0]);
         let mut row = vec![name.clone(), with_range(&full, sci)];
@@ -775,9 +791,7 @@ fn ablation(opts: &Options) -> Result<()> {
                 .collect();
             let median_ratio = spread(&ratios).0;
             sums[k] += median_ratio;
-            if median_ratio > 0.0 {
-                worse[k] += 1;
-            }
+            verdicts[k][verdict(median_ratio)] += 1;
             row.push(format!(
                 "{} ({})",
                 sci(spread(&final_mse(runs)).0),
@@ -800,13 +814,13 @@ fn ablation(opts: &Options) -> Result<()> {
         )
     );
     body.push_str(&report::markdown_table(&head, &rows));
-    let worse: Vec<String> = variants
+    let verdicts: Vec<String> = variants
         .iter()
-        .zip(&worse)
+        .zip(&verdicts)
         .skip(1)
-        .map(|(v, w)| {
+        .map(|(v, [worse, equal, better])| {
             format!(
-                "{}: worse than the full method on {w} of {}",
+                "{}: worse than the full method on {worse} of {}, about equal on {equal}, better on {better}",
                 v.0,
                 per_task.len()
             )
@@ -814,13 +828,14 @@ fn ablation(opts: &Options) -> Result<()> {
         .collect();
     let _ = writeln!(
         body,
-        "\n{}{}.",
-        worse.join("; "),
+        "\n{}{}. About equal means within a factor {:.2} (|log10 ratio| <= {TIE_DECADES}); one seed's noise alone moves a run by more than that on several tasks.",
+        verdicts.join("; "),
         if opts.seeds(1).len() > 1 {
             " (by the median log ratio)"
         } else {
             ""
-        }
+        },
+        10f64.powf(TIE_DECADES)
     );
     write_page(
         opts,
@@ -840,6 +855,7 @@ fn samplers(opts: &Options) -> Result<()> {
     let seeds = opts.seeds(1).len();
     let mut rows = Vec::new();
     let mut wins = vec![0usize; variants.len()];
+    let mut ties = 0;
     for (name, outcomes) in &per_task {
         // Error at equal time: each sampler's parameter MSE when the fastest of the three
         // runs with the same seed ended.
@@ -873,8 +889,12 @@ fn samplers(opts: &Options) -> Result<()> {
                 sci(spread(&at_budget).0)
             ));
         }
-        if let Some(b) = (0..medians.len()).min_by(|&a, &b| medians[a].total_cmp(&medians[b])) {
-            wins[b] += 1;
+        let mut order: Vec<usize> = (0..medians.len()).collect();
+        order.sort_by(|&a, &b| medians[a].total_cmp(&medians[b]));
+        if verdict((medians[order[1]] / medians[order[0]]).log10()) == 0 {
+            wins[order[0]] += 1;
+        } else {
+            ties += 1;
         }
         rows.push(row);
     }
@@ -895,7 +915,8 @@ fn samplers(opts: &Options) -> Result<()> {
         .collect();
     let _ = writeln!(
         body,
-        "\nLowest final parameter MSE, tasks won out of {}: {}.",
+        "\nLowest final parameter MSE by more than a factor {:.2} over the next sampler, tasks won out of {}: {}; ties (the best two within that factor): {ties}.",
+        10f64.powf(TIE_DECADES),
         per_task.len(),
         wins.join(", ")
     );
@@ -1297,6 +1318,16 @@ mod tests {
         let _ = fs::remove_dir_all(&out);
     }
 
+    /// Within a factor 10^0.1 an ablation or a sampler ties; beyond it, the sign decides.
+    #[test]
+    fn small_differences_are_ties() {
+        assert_eq!(verdict(0.25), 0);
+        assert_eq!(verdict(0.1), 1);
+        assert_eq!(verdict(0.0), 1);
+        assert_eq!(verdict(-0.1), 1);
+        assert_eq!(verdict(-0.25), 2);
+    }
+
     /// With several seeds the pages over tasks pair the runs by seed and show each cell's
     /// range; every seed is a run of its own, in the CSV.
     #[test]
@@ -1316,6 +1347,7 @@ mod tests {
         assert_eq!(csv.lines().count(), 1 + 4 * 2);
         let samplers = fs::read_to_string(opts.out.join("samplers.md")).unwrap();
         assert!(samplers.contains("tasks won out of 1"), "{samplers}");
+        assert!(ablation.contains("about equal on"), "{ablation}");
         let _ = fs::remove_dir_all(&opts.out);
     }
 
