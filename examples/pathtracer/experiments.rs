@@ -754,7 +754,8 @@ fn final_mse(runs: &[Outcome]) -> Vec<f64> {
 /// enough to tell a few per cent apart.
 const TIE_DECADES: f64 = 0.1;
 
-/// 0 (worse), 1 (about equal) or 2 (better) for `log10(ablation / full)`.
+/// 0 (worse), 1 (about equal) or 2 (better) for `log10(candidate / reference)`: an ablation
+/// against the full method, or the runner-up sampler against the best (where 0 is a win).
 fn verdict(log_ratio: f64) -> usize {
     if log_ratio > TIE_DECADES {
         0
