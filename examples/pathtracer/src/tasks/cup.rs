@@ -34,6 +34,12 @@ impl Cup {
     }
 }
 
+impl Default for Cup {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// Triangles of a quad strip cell (a, b, c, d counter-clockwise).
 fn quad_tris(out: &mut Vec<Triangle>, a: Vec3, b: Vec3, c: Vec3, d: Vec3) {
     out.push(Triangle {

@@ -1,30 +1,14 @@
-//! The paper's inverse-rendering tasks, solved with the plateau-free gradient on a small CPU
-//! path tracer.
-//!
-//! ```text
-//! cargo run --release --example pathtracer -- optimize shadow          # one task end to end
-//! cargo run --release --example pathtracer -- render cup --target --out cup.png
-//! cargo run --release --example pathtracer -- all                      # every task + baseline
-//! ```
-
-mod experiments;
-// The renderer and the tasks are this example's internal library: each front-end (the
-// commands, the benches, the tests) uses a different part of their surface.
-#[allow(dead_code)]
-mod render;
-mod report;
-mod run;
-#[allow(dead_code)]
-mod tasks;
+//! The command line: `optimize`, `render`, `all`, `experiment` and the other subcommands.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::{Args, Parser, Subcommand};
 
-use report::Result;
-use run::{Crn, Method, SamplerArg, Settings};
-use tasks::{Task, View};
+use crate::report::Result;
+use crate::run::{Crn, Method, SamplerArg, Settings};
+use crate::tasks::{Task, View};
+use crate::{experiments, render, report, run, tasks};
 
 #[derive(Parser)]
 #[command(
@@ -108,10 +92,7 @@ enum Command {
         #[arg(long, default_value = "out")]
         out: PathBuf,
         /// The command that produced the runs, for the page.
-        #[arg(
-            long,
-            default_value = "cargo run --release --example pathtracer -- all"
-        )]
+        #[arg(long, default_value = "cargo run --release -p pathtracer -- all")]
         command: String,
     },
     /// Median render time of every task at its defaults (target parameters, seed 0, scene
@@ -251,7 +232,8 @@ impl RunOptions {
     }
 }
 
-fn main() {
+/// Parses the command line and runs it; an error is printed on one line and exits 1.
+pub fn main() {
     if let Err(e) = run_cli(Cli::parse()) {
         eprintln!("error: {e}");
         std::process::exit(1);
@@ -488,7 +470,7 @@ where
 /// baseline; then `results.md`.
 fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64, baseline: bool) -> Result<()> {
     let command = format!(
-        "cargo run --release --example pathtracer -- all{}{}{}{} --out {}",
+        "cargo run --release -p pathtracer -- all{}{}{}{} --out {}",
         if quick { " --quick" } else { "" },
         if seeds > 1 {
             format!(" --seeds {seeds}")
@@ -576,7 +558,7 @@ fn summarize(out: &Path, command: &str) -> Result<()> {
     ];
     let mut md = String::from("# Results: the paper's tasks\n\n");
     md.push_str(&format!(
-        "Runs by `{command}`; this table by `cargo run --release --example pathtracer -- summarize --out {}` from their `summary.json` files. \"ours\" is the plateau-free gradient at the paper's hyperparameters (supplemental Table 1), with seeds 0, 1, ... (with several seeds: the median [min, max]); FD is a central finite difference (step 1e-3) on the same renderer, loop and settings (run only where its 2n renders per iteration are affordable). Paper numbers: main paper Tables 2 and 3.\n\n",
+        "Runs by `{command}`; this table by `cargo run --release -p pathtracer -- summarize --out {}` from their `summary.json` files. \"ours\" is the plateau-free gradient at the paper's hyperparameters (supplemental Table 1), with seeds 0, 1, ... (with several seeds: the median [min, max]); FD is a central finite difference (step 1e-3) on the same renderer, loop and settings (run only where its 2n renders per iteration are affordable). Paper numbers: main paper Tables 2 and 3.\n\n",
         out.display()
     ));
     md.push_str(&report::markdown_table(&header, &rows));

@@ -305,6 +305,11 @@ impl Mesh {
         self.tris.len()
     }
 
+    /// Whether the mesh has no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.tris.is_empty()
+    }
+
     /// Closest hit (distance, triangle) of a ray given in the mesh's frame.
     #[inline(always)]
     pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, u32)> {

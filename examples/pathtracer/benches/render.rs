@@ -1,12 +1,5 @@
 //! Renderer benchmarks: per-task render time at the task's default settings, BVH build
 //! times, Bvh2 vs CwBvh traversal on the CUP mug, and 1 vs 2 rayon threads on SHADOW.
-//!
-//! The renderer lives in the pathtracer example; its modules are compiled in here.
-
-// `cargo clippy --benches` compiles this with cfg(test) but no test harness, so the
-// example's unit-test modules come in with their `#[test]` functions stripped and their
-// imports unused.
-#![allow(unused_imports)]
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -14,12 +7,7 @@ use std::time::Duration;
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3A;
 
-#[allow(dead_code)]
-#[path = "../examples/pathtracer/render/mod.rs"]
-mod render;
-#[allow(dead_code)]
-#[path = "../examples/pathtracer/tasks/mod.rs"]
-mod tasks;
+use pathtracer::{render, tasks};
 
 use render::rng::Sampler;
 use render::{AaBox, BoxSet, BvhKind, Mesh};

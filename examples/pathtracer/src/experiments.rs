@@ -1,5 +1,5 @@
 //! The supplemental's experiments and the speed/accuracy study, one command each:
-//! `cargo run --release --example pathtracer -- experiment <name> [--quick]`.
+//! `cargo run --release -p pathtracer -- experiment <name> [--quick]`.
 //!
 //! Every experiment writes `<out>/<name>.csv` (the raw runs), one or more plots and
 //! `<out>/<name>.md` (a table and what it shows) with the command that made it.
@@ -74,7 +74,7 @@ impl Options {
 
     fn command(&self, name: &str) -> String {
         format!(
-            "cargo run --release --example pathtracer -- experiment {}{}{}{} --out {}",
+            "cargo run --release -p pathtracer -- experiment {}{}{}{} --out {}",
             name.replace('_', "-"),
             if self.quick { " --quick" } else { "" },
             self.seeds
@@ -1369,7 +1369,7 @@ mod tests {
             };
             let page = fs::read_to_string(out.join(format!("{stem}.md"))).expect("page written");
             assert!(
-                page.contains("cargo run --release --example pathtracer -- experiment"),
+                page.contains("cargo run --release -p pathtracer -- experiment"),
                 "{stem}: {page}"
             );
             assert!(out.join(format!("{stem}.csv")).exists(), "{stem}.csv");
