@@ -226,7 +226,9 @@ impl RunOptions {
         s.method = o.method.unwrap_or(s.method);
         s.crn = o.crn.unwrap_or(s.crn);
         s.fd_step = o.fd_step.unwrap_or(s.fd_step);
-        s.eval_every = o.eval_every.unwrap_or((s.iterations / 100).max(1));
+        s.eval_every = o
+            .eval_every
+            .unwrap_or(run::eval_every(s.iterations, run::CURVE_POINTS));
         s.budget_seconds = o.budget;
         s
     }
@@ -488,7 +490,7 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64, baseline: b
         let mut plateau = Settings::defaults(task.as_ref());
         if quick {
             plateau.iterations = (plateau.iterations / 10).max(20);
-            plateau.eval_every = (plateau.iterations / 20).max(1);
+            plateau.eval_every = run::eval_every(plateau.iterations, 20);
             plateau.scale = Some(0.5);
         }
         let mut ours = Vec::new();

@@ -24,7 +24,7 @@ mod tradeoff;
 use std::fs;
 
 use crate::report::{self, spread, Result};
-use crate::run::{Outcome, Settings};
+use crate::run::{self, Outcome, Settings};
 use crate::tasks::{self, Task};
 
 /// The experiments, by name.
@@ -52,6 +52,10 @@ pub enum Experiment {
 
 /// A named change of a task's default settings.
 type Variant = (&'static str, fn(&mut Settings));
+
+/// Points on the image-error curve of an experiment's run (fewer than a single run's
+/// [`run::CURVE_POINTS`]: experiments make many runs and plot the parameter error).
+const CURVE_POINTS: usize = 50;
 
 /// Options shared by every experiment.
 pub struct Options {
@@ -83,7 +87,7 @@ impl Options {
             s.iterations = (s.iterations / 20).max(min);
             s.scale = Some(s.scale.unwrap_or(1.0) * 0.5);
         }
-        s.eval_every = (s.iterations / 50).max(1);
+        s.eval_every = run::eval_every(s.iterations, CURVE_POINTS);
     }
 
     fn command(&self, name: &str) -> String {

@@ -1,0 +1,140 @@
+//! What a run can be told: the gradient method, the sampler, the renderer seeds, the task's
+//! hyperparameters and their overrides, and how often the image error is measured.
+
+use plateau::Sampling;
+use serde::{Deserialize, Serialize};
+
+use crate::tasks::{Task, View};
+
+/// Points on a run's image-error curve at the defaults (`--eval-every` overrides it).
+pub const CURVE_POINTS: usize = 100;
+
+/// Every how many iterations a run of `iterations` renders its current parameters for the
+/// image-error curve, so that the curve has about `points` points (at most one an iteration).
+/// Those renders cost time the optimisation does not need, hence not every iteration.
+pub fn eval_every(iterations: usize, points: usize) -> usize {
+    (iterations / points).max(1)
+}
+
+/// How the gradient is obtained.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// The plateau-free gradient (the paper's method).
+    Plateau,
+    /// Small-step central finite differences: what a gradient sees without smoothing.
+    Fd,
+    /// Simultaneous-perturbation stochastic approximation.
+    Spsa,
+}
+
+/// The sampler, as named on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SamplerArg {
+    Radial,
+    PerCoordinate,
+    Gaussian,
+}
+
+impl From<SamplerArg> for Sampling {
+    fn from(s: SamplerArg) -> Self {
+        match s {
+            SamplerArg::Radial => Sampling::Radial,
+            SamplerArg::PerCoordinate => Sampling::PerCoordinate,
+            SamplerArg::Gaussian => Sampling::Gaussian,
+        }
+    }
+}
+
+/// Which renderer seed each evaluation uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Crn {
+    /// Every render, the reference included, uses the run's seed: the loss is a
+    /// deterministic function of theta and reaches zero at the target (the paper's code).
+    Fixed,
+    /// Each antithetic pair shares a fresh seed from the estimator; the reference keeps the
+    /// run's seed (the loss keeps a noise floor).
+    Pair,
+}
+
+/// Everything a run can be told.
+#[derive(Clone, Debug, Serialize)]
+pub struct Settings {
+    pub method: Method,
+    pub sampling: SamplerArg,
+    pub antithetic: bool,
+    pub anneal: bool,
+    pub samples: usize,
+    pub sigma0: f64,
+    pub lr: f64,
+    pub spp: u32,
+    pub iterations: usize,
+    pub seed: u64,
+    pub crn: Crn,
+    pub fd_step: f64,
+    pub fov_degrees: Option<f64>,
+    pub scale: Option<f64>,
+    /// Render the current parameters for the image-error curve every this many iterations.
+    pub eval_every: usize,
+    /// Stop when the optimisation (renders for the gradient included) has used this much time.
+    pub budget_seconds: Option<f64>,
+}
+
+impl Settings {
+    /// The task's paper defaults (supplemental Table 1) with the plateau-free gradient.
+    pub fn defaults(task: &dyn Task) -> Self {
+        let d = task.defaults();
+        Settings {
+            method: Method::Plateau,
+            sampling: SamplerArg::Radial,
+            antithetic: true,
+            anneal: true,
+            samples: d.samples,
+            sigma0: d.sigma0,
+            lr: d.lr,
+            spp: d.spp,
+            iterations: d.iterations,
+            seed: 0,
+            crn: Crn::Fixed,
+            fd_step: 1e-3,
+            fov_degrees: None,
+            scale: None,
+            eval_every: eval_every(d.iterations, CURVE_POINTS),
+            budget_seconds: None,
+        }
+    }
+
+    /// Whether iteration `iteration` renders the current parameters for the image-error
+    /// curve: every `eval_every`-th from the first, and the last.
+    pub fn records_image_error(&self, iteration: usize) -> bool {
+        iteration % self.eval_every == 0 || iteration + 1 == self.iterations
+    }
+
+    /// The view overrides (field of view, resolution) every render of the run uses.
+    pub fn view(&self) -> View {
+        View {
+            fov_degrees: self.fov_degrees,
+            scale: self.scale,
+        }
+    }
+
+    /// A short label for tables and legends.
+    pub fn label(&self) -> String {
+        match self.method {
+            Method::Fd => "finite difference".into(),
+            Method::Spsa => "SPSA".into(),
+            Method::Plateau => {
+                let mut s = format!("{:?}", self.sampling).to_lowercase();
+                if !self.antithetic {
+                    s.push_str(", no antithetic");
+                }
+                if !self.anneal {
+                    s.push_str(", no annealing");
+                }
+                s
+            }
+        }
+    }
+}
