@@ -64,7 +64,7 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64, baseline: b
         if only.is_some_and(|names| !names.iter().any(|n| n == task.name())) {
             continue;
         }
-        let mut plateau = Settings::defaults(task.as_ref());
+        let mut plateau = Settings::defaults(&task);
         if quick {
             plateau.iterations = (plateau.iterations / 10).max(20);
             plateau.eval_every = run::eval_every(plateau.iterations, 20);
@@ -78,7 +78,7 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64, baseline: b
                 0 => out.join(task.name()),
                 k => out.join(format!("{}-seed{k}", task.name())),
             };
-            ours.push(run::optimize(task.as_ref(), &s, Some(&dir), true)?);
+            ours.push(run::optimize(&task, &s, Some(&dir), true)?);
         }
         // Central differences cost 2n renders per iteration: affordable for the
         // low-dimensional tasks only (SORT would need 300 renders an iteration).
@@ -86,7 +86,7 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64, baseline: b
             let mut fd = plateau.clone();
             fd.method = Method::Fd;
             run::optimize(
-                task.as_ref(),
+                &task,
                 &fd,
                 Some(&out.join(format!("{}-fd", task.name()))),
                 true,

@@ -104,7 +104,7 @@ fn run_cli(cli: Cli) -> Result<()> {
 }
 
 /// The task called `name`, or an error listing the tasks.
-fn find_task(name: &str) -> Result<Box<dyn Task>> {
+fn find_task(name: &str) -> Result<Task> {
     tasks::by_name(name).ok_or_else(|| {
         let names: Vec<_> = tasks::all().iter().map(|t| t.name()).collect();
         format!("unknown task {name:?}; the tasks are {}", names.join(", ")).into()

@@ -64,7 +64,7 @@ struct RunOptions {
 
 impl RunOptions {
     /// The task's defaults with these overrides.
-    fn settings(&self, task: &dyn Task) -> Settings {
+    fn settings(&self, task: &Task) -> Settings {
         let mut s = Settings::defaults(task);
         let o = self;
         s.iterations = o.iterations.unwrap_or(s.iterations);
@@ -94,19 +94,19 @@ pub(super) fn run(args: Args) -> Result<()> {
     let Args { task, opts, out } = args;
     let task = find_task(&task)?;
     with_threads(opts.render.threads, || {
-        let mut settings = opts.settings(task.as_ref());
+        let mut settings = opts.settings(&task);
         if let Some(budget) = opts.budget {
             if !(budget.is_finite() && budget > 0.0) {
                 return Err(
                     format!("--budget must be a positive number of seconds, got {budget}").into(),
                 );
             }
-            let (plan, why) = run::plan_for_budget(task.as_ref(), &settings, budget);
+            let (plan, why) = run::plan_for_budget(&task, &settings, budget);
             eprintln!("{why}");
             settings = plan;
         }
         let dir = out.unwrap_or_else(|| Path::new("out").join(task.name()));
-        let outcome = run::optimize(task.as_ref(), &settings, Some(&dir), !opts.quiet)?;
+        let outcome = run::optimize(&task, &settings, Some(&dir), !opts.quiet)?;
         let s = &outcome.summary;
         println!(
             "{}: param MSE {:.3e} -> {:.3e}, image MSE {:.3e} -> {:.3e}, {:.3} s/iteration ({} iterations), outputs in {}",

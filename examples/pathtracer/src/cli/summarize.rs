@@ -39,7 +39,7 @@ pub(super) fn write_results(out: &Path, command: &str) -> Result<()> {
         let mut ours = vec![first];
         ours.extend((1..).map_while(|k| read(out.join(format!("{}-seed{k}", task.name())))));
         let fd = read(out.join(format!("{}-fd", task.name())));
-        rows.push(results_row(task.as_ref(), &ours, fd.as_ref()));
+        rows.push(results_row(&task, &ours, fd.as_ref()));
     }
     let header = [
         "task",
@@ -71,7 +71,7 @@ pub(super) fn write_results(out: &Path, command: &str) -> Result<()> {
 }
 
 /// One row of `results.md`: the settings, our errors over seeds, the paper's and the baseline's.
-fn results_row(task: &dyn Task, ours: &[run::Summary], fd: Option<&run::Summary>) -> Vec<String> {
+fn results_row(task: &Task, ours: &[run::Summary], fd: Option<&run::Summary>) -> Vec<String> {
     let s = &ours[0];
     let paper = task.paper();
     let cell = |v: Option<f64>| v.map_or("-".to_string(), report::sci);

@@ -17,7 +17,7 @@ use crate::tasks::Task;
 /// key is the task and every setting; the entry also holds a hash of the executable, so any
 /// change of code misses the cache instead of reusing a stale run (`--reuse-runs` waives
 /// that check).
-pub(super) fn optimize(opts: &Options, task: &dyn Task, s: &Settings) -> Result<Outcome> {
+pub(super) fn optimize(opts: &Options, task: &Task, s: &Settings) -> Result<Outcome> {
     let key = format!("{} {:?}", task.name(), s);
     let file = opts.out.join("runs").join(format!(
         "{}-{:016x}.json",
@@ -102,17 +102,17 @@ mod tests {
         let opts = quick_options("cache");
         let out = opts.out.clone();
         let t = super::super::task("shadow").unwrap();
-        let mut s = Settings::defaults(t.as_ref());
+        let mut s = Settings::defaults(&t);
         s.iterations = 3;
         s.spp = 2;
         s.scale = Some(0.125);
-        let first = optimize(&opts, t.as_ref(), &s).unwrap();
-        let again = optimize(&opts, t.as_ref(), &s).unwrap();
+        let first = optimize(&opts, &t, &s).unwrap();
+        let again = optimize(&opts, &t, &s).unwrap();
         assert_eq!(first.summary.seconds_total, again.summary.seconds_total);
         assert_eq!(first.summary.param_mse, again.summary.param_mse);
         assert_eq!(first.history.len(), again.history.len());
         s.seed = 1;
-        let other = optimize(&opts, t.as_ref(), &s).unwrap();
+        let other = optimize(&opts, &t, &s).unwrap();
         assert_ne!(first.summary.seconds_total, other.summary.seconds_total);
         assert_eq!(fs::read_dir(out.join("runs")).unwrap().count(), 2);
         let _ = fs::remove_dir_all(&out);

@@ -16,14 +16,14 @@ pub(super) fn run(opts: &Options) -> Result<()> {
     };
     let mut runs = Vec::new();
     for &n in &ns {
-        let mut s = Settings::defaults(shadow.as_ref());
+        let mut s = Settings::defaults(&shadow);
         s.samples = n;
         s.iterations = if opts.quick { 4 } else { 20 };
         s.eval_every = usize::MAX;
         if opts.quick {
             s.scale = Some(0.5);
         }
-        runs.push((n, cache::optimize(opts, shadow.as_ref(), &s)?));
+        runs.push((n, cache::optimize(opts, &shadow, &s)?));
     }
     let total: Vec<(f64, f64)> = runs
         .iter()

@@ -41,11 +41,11 @@ pub(super) fn run(opts: &Options) -> Result<()> {
         let mut histories = Vec::new();
         let mut curves: Vec<Vec<f64>> = Vec::new();
         for &seed in &seeds {
-            let mut s = Settings::defaults(shadow.as_ref());
+            let mut s = Settings::defaults(&shadow);
             s.samples = n;
             s.seed = seed;
             opts.shrink(&mut s, 40);
-            let o = cache::optimize(opts, shadow.as_ref(), &s)?;
+            let o = cache::optimize(opts, &shadow, &s)?;
             finals.push(o.summary.param_mse);
             curves.push(o.history.iter().map(|r| r.param_mse).collect());
             for r in &o.history {

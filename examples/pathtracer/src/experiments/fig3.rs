@@ -29,13 +29,13 @@ pub(super) fn run(opts: &Options) -> Result<()> {
         for &sigma0 in &sigmas {
             let mut finals = Vec::new();
             for &seed in &seeds {
-                let mut s = Settings::defaults(shadow.as_ref());
+                let mut s = Settings::defaults(&shadow);
                 s.sigma0 = sigma0;
                 s.seed = seed;
                 // The task's own view is `None`, so the run is shared with the other experiments.
                 s.fov_degrees = (fov != SHADOW_FOV).then_some(fov);
                 opts.shrink(&mut s, 40);
-                let o = cache::optimize(opts, shadow.as_ref(), &s)?;
+                let o = cache::optimize(opts, &shadow, &s)?;
                 finals.push(o.summary.param_mse);
                 csv.push(summary_csv_row(&o, &[format!("{fov}")]));
             }

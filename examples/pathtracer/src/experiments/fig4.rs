@@ -6,10 +6,10 @@ use crate::run::{self, Settings};
 
 pub(super) fn run(opts: &Options) -> Result<()> {
     let t = task("texture")?;
-    let mut s = Settings::defaults(t.as_ref());
+    let mut s = Settings::defaults(&t);
     opts.shrink(&mut s, 30);
     let dir = opts.out.join("fig4");
-    let o = run::optimize(t.as_ref(), &s, Some(&dir), false)?;
+    let o = run::optimize(&t, &s, Some(&dir), false)?;
     run::write_history(&opts.out.join("fig4.csv"), &o.history)?;
     let m = &o.summary;
     let body = format!(

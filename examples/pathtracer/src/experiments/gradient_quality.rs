@@ -10,7 +10,7 @@ use crate::tasks;
 
 pub(super) fn run(opts: &Options) -> Result<()> {
     let shadow = task("shadow")?;
-    let defaults = Settings::defaults(shadow.as_ref());
+    let defaults = Settings::defaults(&shadow);
     let target = shadow.target();
     let near: Vec<f64> = target.iter().map(|x| x + 0.1).collect();
     let places = [

@@ -106,7 +106,7 @@ impl Options {
 
     /// Whether an experiment over every task includes `task`: the `--tasks` list if given;
     /// otherwise every task, or in a quick run the two cheapest (a smoke test, not a result).
-    fn wants(&self, task: &dyn Task) -> bool {
+    fn wants(&self, task: &Task) -> bool {
         match &self.tasks {
             Some(names) => names.iter().any(|n| n == task.name()),
             None => !self.quick || ["cup", "shadow"].contains(&task.name()),
@@ -131,7 +131,7 @@ pub fn run(experiment: Experiment, opts: &Options) -> Result<()> {
 }
 
 /// The task called `name`, or an error naming it.
-fn task(name: &str) -> Result<Box<dyn Task>> {
+fn task(name: &str) -> Result<Task> {
     tasks::by_name(name).ok_or_else(|| format!("no task {name}").into())
 }
 
@@ -226,18 +226,18 @@ fn variants_on_tasks(
     let mut per_task = Vec::new();
     let mut csv = Vec::new();
     for t in tasks::all() {
-        if !opts.wants(t.as_ref()) {
+        if !opts.wants(&t) {
             continue;
         }
         let mut outcomes = Vec::new();
         for (label, change) in variants {
             let mut runs = Vec::new();
             for &seed in &seeds {
-                let mut s = Settings::defaults(t.as_ref());
+                let mut s = Settings::defaults(&t);
                 change(&mut s);
                 s.seed = seed;
                 opts.shrink(&mut s, 30);
-                let o = cache::optimize(opts, t.as_ref(), &s)?;
+                let o = cache::optimize(opts, &t, &s)?;
                 csv.push(summary_csv_row(&o, &[label.to_string()]));
                 runs.push(o);
             }

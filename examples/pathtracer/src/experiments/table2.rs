@@ -12,13 +12,13 @@ pub(super) fn run(opts: &Options) -> Result<()> {
     let mut at_or_below = 0;
     for name in ["cup", "occlusion", "gi", "caustic"] {
         let t = task(name)?;
-        if !opts.wants(t.as_ref()) {
+        if !opts.wants(&t) {
             continue;
         }
-        let mut s = Settings::defaults(t.as_ref());
+        let mut s = Settings::defaults(&t);
         s.sigma0 = 0.5;
         opts.shrink(&mut s, 40);
-        let o = cache::optimize(opts, t.as_ref(), &s)?;
+        let o = cache::optimize(opts, &t, &s)?;
         let paper = t.paper().and_then(|p| p.sigma05);
         let ratio = paper.map_or(f64::NAN, |p| o.summary.param_mse / p.1);
         at_or_below += usize::from(ratio <= 1.0);

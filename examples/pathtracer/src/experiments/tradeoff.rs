@@ -15,10 +15,10 @@ pub(super) fn run(opts: &Options) -> Result<()> {
     );
     for name in ["shadow", "gi"] {
         let t = task(name)?;
-        if !opts.wants(t.as_ref()) {
+        if !opts.wants(&t) {
             continue;
         }
-        let base = Settings::defaults(t.as_ref());
+        let base = Settings::defaults(&t);
         let mut configs: Vec<(String, Settings)> = Vec::new();
         let ns: &[usize] = if opts.quick { &[2, 4] } else { &[2, 4, 8, 16] };
         let spps: &[u32] = if opts.quick {
@@ -55,7 +55,7 @@ pub(super) fn run(opts: &Options) -> Result<()> {
         let mut ran = Vec::new();
         for (label, mut s) in configs {
             opts.shrink(&mut s, 30);
-            let o = cache::optimize(opts, t.as_ref(), &s)?;
+            let o = cache::optimize(opts, &t, &s)?;
             csv.push(summary_csv_row(&o, std::slice::from_ref(&label)));
             results.push((label, o.summary));
             ran.push(s);
@@ -154,7 +154,7 @@ pub(super) fn run(opts: &Options) -> Result<()> {
                 for &seed in &seeds {
                     let mut s = settings.clone();
                     s.seed = seed;
-                    let o = cache::optimize(opts, t.as_ref(), &s)?;
+                    let o = cache::optimize(opts, &t, &s)?;
                     csv.push(summary_csv_row(&o, &[format!("seeds: {label}")]));
                     finals.push(o.summary.param_mse);
                 }

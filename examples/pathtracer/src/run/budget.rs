@@ -7,7 +7,7 @@ use crate::tasks::Task;
 
 /// Settings that fit a run into `budget` seconds, and a line saying what was chosen: times one
 /// render at the defaults, then [`plan_with_render_time`].
-pub fn plan_for_budget(task: &dyn Task, s: &Settings, budget: f64) -> (Settings, String) {
+pub fn plan_for_budget(task: &Task, s: &Settings, budget: f64) -> (Settings, String) {
     let view = s.view();
     // One warm-up render (caches, thread pool), then the timed one.
     let _ = task.render(&task.start(), s.seed, s.spp, view);
@@ -85,7 +85,7 @@ mod tests {
     #[test]
     fn budget_planner_cuts_resolution_then_spp_then_iterations() {
         let shadow = tasks::by_name("shadow").unwrap();
-        let s = Settings::defaults(shadow.as_ref()); // N 2, 32 spp, 400 iterations
+        let s = Settings::defaults(&shadow); // N 2, 32 spp, 400 iterations
         let full = 0.1 * 800.0; // 0.1 s per render, 800 renders
         let pick = |fraction: f64| {
             let (p, _) = plan_with_render_time(0.1, &s, fraction * full);

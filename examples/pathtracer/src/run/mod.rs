@@ -32,7 +32,7 @@ use crate::tasks::{param_mse, Task};
 
 /// Runs one optimisation of `task`, writing its outputs into `out` if given.
 pub fn optimize(
-    task: &dyn Task,
+    task: &Task,
     s: &Settings,
     out: Option<&Path>,
     show_progress: bool,
@@ -80,7 +80,7 @@ pub fn optimize(
 /// The objective: the image MSE of a render at `theta` against `reference`, with the seed
 /// [`Crn`] picks; the time spent rendering accumulates in `render_time`.
 fn image_loss<'a>(
-    task: &'a dyn Task,
+    task: &'a Task,
     s: &'a Settings,
     reference: &'a Image,
     render_time: &'a Cell<Duration>,
@@ -118,7 +118,7 @@ where
 
 /// Adam (projected onto the task's box, if it has one) under the paper's annealing schedule
 /// or, for the ablation, a constant sigma.
-fn optimizer(task: &dyn Task, s: &Settings) -> Result<Optimizer> {
+fn optimizer(task: &Task, s: &Settings) -> Result<Optimizer> {
     let mut adam = Adam::new(s.lr)?;
     if let Some((lower, upper)) = task.bounds() {
         adam = adam.bounds(lower, upper)?;
@@ -137,7 +137,7 @@ fn optimizer(task: &dyn Task, s: &Settings) -> Result<Optimizer> {
 /// for the progress strip, the optimisation time (the image-error renders excluded), the
 /// progress bar; and whether the time budget is spent.
 struct Recorder<'a> {
-    task: &'a dyn Task,
+    task: &'a Task,
     s: &'a Settings,
     reference: &'a Image,
     target: Vec<f64>,
@@ -151,7 +151,7 @@ struct Recorder<'a> {
 
 impl<'a> Recorder<'a> {
     fn new(
-        task: &'a dyn Task,
+        task: &'a Task,
         s: &'a Settings,
         reference: &'a Image,
         start: &[f64],
@@ -219,7 +219,7 @@ impl<'a> Recorder<'a> {
 /// also against a render with a seed the run never used), and where the time went
 /// (`times`: optimisation, of which rendering).
 fn summarize(
-    task: &dyn Task,
+    task: &Task,
     s: &Settings,
     run: &History,
     final_theta: &[f64],
@@ -291,11 +291,11 @@ mod tests {
     #[test]
     fn shadow_converges_from_its_plateau_and_finite_differences_stay_stuck() {
         let task = tasks::by_name("shadow").expect("the SHADOW task exists");
-        let mut s = Settings::defaults(task.as_ref());
+        let mut s = Settings::defaults(&task);
         s.scale = Some(0.25);
         s.spp = 4;
         s.eval_every = usize::MAX;
-        let ours = optimize(task.as_ref(), &s, None, false).expect("the run succeeds");
+        let ours = optimize(&task, &s, None, false).expect("the run succeeds");
         let m = &ours.summary;
         // The paper reaches 1.81e-3 at full resolution; a sixteenth of the pixels is noisier,
         // so ask for an order of magnitude less than the start's 1.625 and well under 1e-2.
@@ -307,7 +307,7 @@ mod tests {
         );
 
         s.method = Method::Fd;
-        let fd = optimize(task.as_ref(), &s, None, false).expect("the run succeeds");
+        let fd = optimize(&task, &s, None, false).expect("the run succeeds");
         // On the plateau a small-step difference sees nothing: the parameters barely move.
         assert!(
             fd.summary.param_mse > 0.5 * fd.summary.initial_param_mse,

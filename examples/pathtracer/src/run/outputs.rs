@@ -11,7 +11,7 @@ use crate::tasks::Task;
 
 /// Writes the images, the strip, the plot, the CSV and the summary of a run.
 pub(super) fn write_outputs(
-    task: &dyn Task,
+    task: &Task,
     s: &Settings,
     outcome: &Outcome,
     [target, initial, final_image]: [&Image; 3],

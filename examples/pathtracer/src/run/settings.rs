@@ -84,7 +84,7 @@ pub struct Settings {
 
 impl Settings {
     /// The task's paper defaults (supplemental Table 1) with the plateau-free gradient.
-    pub fn defaults(task: &dyn Task) -> Self {
+    pub fn defaults(task: &Task) -> Self {
         let d = task.defaults();
         Settings {
             method: Method::Plateau,

@@ -4,18 +4,11 @@
 
 use glam::Vec3;
 
-use super::{param, unit_box, Defaults, Paper, Task, View};
+use super::{param, Scenario, View};
 use crate::render::{Geometry, Lights, Material, Quad, Scene, Sphere};
 
 /// The CAUSTIC task.
 pub struct Caustic;
-
-impl Caustic {
-    /// The task (analytic shapes only).
-    pub fn new() -> Self {
-        Caustic
-    }
-}
 
 // The design and the measurements behind it: docs/tasks.md, CAUSTIC.
 
@@ -40,54 +33,13 @@ const EYE: [f32; 3] = [0.0, 1.4, 4.5];
 const LOOK_Y: f32 = 0.0;
 const HFOV: f64 = 45.0;
 
-impl Task for Caustic {
-    fn name(&self) -> &'static str {
-        "caustic"
-    }
-
-    fn description(&self) -> &'static str {
-        "Move an area light above an opaque plate (x, z, normalised) so that the caustic it casts through the glass sphere plugging the plate's hole matches the reference."
-    }
-
-    fn dim(&self) -> usize {
-        2
-    }
-
-    fn defaults(&self) -> Defaults {
-        Defaults {
-            samples: 4,
-            sigma0: 0.125,
-            spp: 32,
-            lr: 0.01,
-            iterations: 500,
-        }
-    }
-
-    fn paper(&self) -> Option<Paper> {
-        Some(Paper {
-            image_mse: 1.89e-5,
-            param_mse: 9.76e-5,
-            seconds_per_iteration: 0.08,
-            mitsuba_image_mse: 3.12e-1,
-            mitsuba_param_mse: 8.50,
-            sigma05: Some((2.4e-3, 2.2e-4)),
-        })
-    }
-
+impl Scenario for Caustic {
     fn start(&self) -> Vec<f64> {
         vec![0.5, 0.9]
     }
 
     fn target(&self) -> Vec<f64> {
         vec![0.3, 0.35]
-    }
-
-    fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)> {
-        unit_box(2)
-    }
-
-    fn max_depth(&self) -> u32 {
-        8
     }
 
     fn scene(&self, theta: &[f64], view: View) -> Scene {

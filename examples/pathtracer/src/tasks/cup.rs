@@ -10,7 +10,7 @@ use std::sync::Arc;
 use glam::{Vec3, Vec3A};
 use obvhs::triangle::Triangle;
 
-use super::{param, unit_box, Defaults, Paper, Task, View};
+use super::{param, Scenario, View};
 use crate::render::{
     BvhKind, Geometry, Lights, Material, Mesh, MeshInstance, PointLight, Quad, Scene,
 };
@@ -124,54 +124,13 @@ pub fn mug_triangles() -> Vec<Triangle> {
     tris
 }
 
-impl Task for Cup {
-    fn name(&self) -> &'static str {
-        "cup"
-    }
-
-    fn description(&self) -> &'static str {
-        "Rotate a mug about its vertical axis ([0,1] = one turn) until its handle, hidden behind the body at the start, points right."
-    }
-
-    fn dim(&self) -> usize {
-        1
-    }
-
-    fn defaults(&self) -> Defaults {
-        Defaults {
-            samples: 2,
-            sigma0: 0.25,
-            spp: 16,
-            lr: 0.01,
-            iterations: 400,
-        }
-    }
-
-    fn paper(&self) -> Option<Paper> {
-        Some(Paper {
-            image_mse: 4.92e-6,
-            param_mse: 4.18e-7,
-            seconds_per_iteration: 0.10,
-            mitsuba_image_mse: 5.49e-3,
-            mitsuba_param_mse: 7.5e-2,
-            sigma05: Some((1.8e-7, 3.0e-7)),
-        })
-    }
-
+impl Scenario for Cup {
     fn start(&self) -> Vec<f64> {
         vec![0.5]
     }
 
     fn target(&self) -> Vec<f64> {
         vec![0.25]
-    }
-
-    fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)> {
-        unit_box(1)
-    }
-
-    fn max_depth(&self) -> u32 {
-        4
     }
 
     fn scene(&self, theta: &[f64], view: View) -> Scene {

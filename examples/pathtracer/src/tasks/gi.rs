@@ -5,18 +5,11 @@ use std::f32::consts::FRAC_PI_2;
 
 use glam::{Vec3, Vec3A};
 
-use super::{param, unit_box, Defaults, Paper, Task, View};
+use super::{param, Scenario, View};
 use crate::render::{Geometry, Lights, Material, OrientedBox, Quad, Scene};
 
 /// The GI task.
 pub struct Gi;
-
-impl Gi {
-    /// The task (analytic shapes only).
-    pub fn new() -> Self {
-        Gi
-    }
-}
 
 /// The inset camera (design and measurements: docs/tasks.md, GI). It stands at x = -0.9 and
 /// turns right by half its field of view (LOOK is 4.2 deep and 4.2 tan(14 deg) = 1.046 to the
@@ -27,40 +20,7 @@ const EYE: [f32; 3] = [-0.9, 0.9, 3.2];
 const LOOK: [f32; 3] = [0.146, 0.6, -1.0];
 const HFOV: f64 = 28.0;
 
-impl Task for Gi {
-    fn name(&self) -> &'static str {
-        "gi"
-    }
-
-    fn description(&self) -> &'static str {
-        "Recover a Cornell box's ceiling-light position (x, z), left-wall RGB reflectance and tall-box rotation from an inset view that shows neither the light nor the left wall."
-    }
-
-    fn dim(&self) -> usize {
-        6
-    }
-
-    fn defaults(&self) -> Defaults {
-        Defaults {
-            samples: 4,
-            sigma0: 0.125,
-            spp: 16,
-            lr: 0.05,
-            iterations: 500,
-        }
-    }
-
-    fn paper(&self) -> Option<Paper> {
-        Some(Paper {
-            image_mse: 5.07e-5,
-            param_mse: 8.71e-4,
-            seconds_per_iteration: 0.15,
-            mitsuba_image_mse: 3.78e-2,
-            mitsuba_param_mse: 3.87e-1,
-            sigma05: Some((1.0e-4, 6.6e-2)),
-        })
-    }
-
+impl Scenario for Gi {
     /// [light x, light z, left wall r, g, b, tall-box rotation].
     fn start(&self) -> Vec<f64> {
         vec![0.2, 0.8, 0.2, 0.5, 0.8, 0.7]
@@ -68,14 +28,6 @@ impl Task for Gi {
 
     fn target(&self) -> Vec<f64> {
         vec![0.5, 0.5, 0.8, 0.1, 0.1, 0.3]
-    }
-
-    fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)> {
-        unit_box(6)
-    }
-
-    fn max_depth(&self) -> u32 {
-        6
     }
 
     fn scene(&self, theta: &[f64], view: View) -> Scene {

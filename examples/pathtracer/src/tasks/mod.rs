@@ -2,6 +2,11 @@
 //!
 //! The optimiser sees only [`Task::render`] (and the loss it computes from two images); a
 //! task knows nothing of gradients.
+//!
+//! A task is a file that builds its scene ([`Scenario`]: start, target, the scene at theta)
+//! and a row of [`TASKS`] (its name, depth, bounds and supplemental Table 1 hyperparameters);
+//! the paper's published numbers are in [`PAPER`]. To add a task: a file implementing
+//! [`Scenario`] and a row in [`TASKS`].
 
 mod caustic;
 pub mod cup;
@@ -16,6 +21,76 @@ use glam::Vec3;
 pub use crate::render::Image;
 use crate::render::{render, Camera, Scene, Settings};
 
+/// Every task, in the paper's order (TEXTURE last), with what every task states:
+/// its name, its scene, the longest path in segments (2 = direct light only), whether theta
+/// lives in the unit box [0, 1]^n (else in world units, unbounded), and its hyperparameters
+/// (supplemental Table 1; TEXTURE's are ours, see docs/tasks.md).
+#[rustfmt::skip]
+const TASKS: [Entry; 7] = [
+    //         name         scene                                 depth  unit box  N  sigma0  spp  LR     iterations
+    Entry::new("cup",       || Box::new(cup::Cup::new()),             4, true,  Defaults::new(2,  0.25,  16, 0.01,  400)),
+    Entry::new("shadow",    || Box::new(shadow::Shadow),              6, false, Defaults::new(2,  0.5,   32, 0.02,  400)),
+    Entry::new("occlusion", || Box::new(occlusion::Occlusion),        6, true,  Defaults::new(2,  0.8,   32, 0.02,  600)),
+    Entry::new("gi",        || Box::new(gi::Gi),                      6, true,  Defaults::new(4,  0.125, 16, 0.05,  500)),
+    Entry::new("sort",      || Box::new(sort::Sort),                  2, true,  Defaults::new(16, 0.5,   32, 0.01,  4000)),
+    Entry::new("caustic",   || Box::new(caustic::Caustic),            8, true,  Defaults::new(4,  0.125, 32, 0.01,  500)),
+    Entry::new("texture",   || Box::new(texture::TextureTask),        2, true,  Defaults::new(32, 0.1,   4,  0.003, 4000)),
+];
+
+/// The paper's results for its black-box estimator, by task: image MSE, parameter MSE, GPU
+/// seconds per iteration, Mitsuba 3's image and parameter MSE (main paper Tables 2 and 3 of
+/// SPEC), and supplemental Table 2's (image, parameter) MSE at sigma0 = 0.5. TEXTURE has no
+/// table entry.
+#[rustfmt::skip]
+const PAPER: [(&str, Paper); 6] = [
+    //    task         image    param    s/iter  Mitsuba image, param  sigma0 = 0.5
+    ("cup",       Paper::new(4.92e-6, 4.18e-7, 0.10, 5.49e-3, 7.5e-2,  Some((1.8e-7, 3.0e-7)))),
+    ("shadow",    Paper::new(1.74e-5, 1.81e-3, 0.04, 1.64e-3, 5.06,    None)),
+    ("occlusion", Paper::new(2.34e-4, 3.29e-3, 0.09, 5.85e-2, 52.3,    Some((2.2e-3, 7.2e-3)))),
+    ("gi",        Paper::new(5.07e-5, 8.71e-4, 0.15, 3.78e-2, 3.87e-1, Some((1.0e-4, 6.6e-2)))),
+    ("sort",      Paper::new(3.81e-3, 4.19e-1, 2.23, 1.18e-2, 6.64,    None)),
+    ("caustic",   Paper::new(1.89e-5, 9.76e-5, 0.08, 3.12e-1, 8.50,    Some((2.4e-3, 2.2e-4)))),
+];
+
+/// What a task's file provides: where the optimisation starts, the parameters of the
+/// reference image, and the scene at any parameters.
+pub trait Scenario: Send + Sync {
+    /// Where the optimisation starts.
+    fn start(&self) -> Vec<f64>;
+    /// The parameters of the reference image.
+    fn target(&self) -> Vec<f64>;
+    /// The scene at parameters `theta` (static parts are shared, built once in the
+    /// constructor); `view` adjusts the task's camera.
+    fn scene(&self, theta: &[f64], view: View) -> Scene;
+}
+
+/// A row of [`TASKS`].
+struct Entry {
+    name: &'static str,
+    scenario: fn() -> Box<dyn Scenario>,
+    max_depth: u32,
+    unit_box: bool,
+    defaults: Defaults,
+}
+
+impl Entry {
+    const fn new(
+        name: &'static str,
+        scenario: fn() -> Box<dyn Scenario>,
+        max_depth: u32,
+        unit_box: bool,
+        defaults: Defaults,
+    ) -> Self {
+        Entry {
+            name,
+            scenario,
+            max_depth,
+            unit_box,
+            defaults,
+        }
+    }
+}
+
 /// Supplemental Table 1 hyperparameters of a task.
 #[derive(Clone, Copy, Debug)]
 pub struct Defaults {
@@ -29,6 +104,19 @@ pub struct Defaults {
     pub lr: f64,
     /// Optimisation steps.
     pub iterations: usize,
+}
+
+impl Defaults {
+    /// The row of Table 1: N, sigma0, spp, LR, iterations.
+    const fn new(samples: usize, sigma0: f64, spp: u32, lr: f64, iterations: usize) -> Self {
+        Defaults {
+            samples,
+            sigma0,
+            spp,
+            lr,
+            iterations,
+        }
+    }
 }
 
 /// The paper's published numbers for its black-box estimator (main paper Table 2 / Table 3 of SPEC).
@@ -46,6 +134,27 @@ pub struct Paper {
     pub mitsuba_param_mse: f64,
     /// Supplemental Table 2: (image, param) at sigma0 = 0.5.
     pub sigma05: Option<(f64, f64)>,
+}
+
+impl Paper {
+    /// A row of [`PAPER`], in the order of the fields.
+    const fn new(
+        image_mse: f64,
+        param_mse: f64,
+        seconds_per_iteration: f64,
+        mitsuba_image_mse: f64,
+        mitsuba_param_mse: f64,
+        sigma05: Option<(f64, f64)>,
+    ) -> Self {
+        Paper {
+            image_mse,
+            param_mse,
+            seconds_per_iteration,
+            mitsuba_image_mse,
+            mitsuba_param_mse,
+            sigma05,
+        }
+    }
 }
 
 /// View overrides used by experiments (Fig. 3 changes the field of view, the speed/accuracy study the resolution).
@@ -83,30 +192,72 @@ impl View {
     }
 }
 
-/// One inverse-rendering task of the paper.
-pub trait Task: Send + Sync {
+/// One inverse-rendering task of the paper: its row of [`TASKS`] and its scene.
+pub struct Task {
+    entry: &'static Entry,
+    scenario: Box<dyn Scenario>,
+}
+
+impl Task {
+    fn new(entry: &'static Entry) -> Self {
+        Task {
+            entry,
+            scenario: (entry.scenario)(),
+        }
+    }
+
     /// Short name: "cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture".
-    fn name(&self) -> &'static str;
-    /// One sentence on what is optimised.
-    fn description(&self) -> &'static str;
+    pub fn name(&self) -> &'static str {
+        self.entry.name
+    }
+
     /// Number of parameters.
-    fn dim(&self) -> usize;
+    pub fn dim(&self) -> usize {
+        self.start().len()
+    }
+
     /// Supplemental Table 1 hyperparameters (TEXTURE: ours, see docs/tasks.md).
-    fn defaults(&self) -> Defaults;
+    pub fn defaults(&self) -> Defaults {
+        self.entry.defaults
+    }
+
     /// The paper's numbers; None for TEXTURE (no table entry).
-    fn paper(&self) -> Option<Paper>;
+    pub fn paper(&self) -> Option<Paper> {
+        PAPER
+            .iter()
+            .find(|(name, _)| *name == self.name())
+            .map(|(_, paper)| *paper)
+    }
+
     /// Where the optimisation starts.
-    fn start(&self) -> Vec<f64>;
+    pub fn start(&self) -> Vec<f64> {
+        self.scenario.start()
+    }
+
     /// The parameters of the reference image.
-    fn target(&self) -> Vec<f64>;
-    /// Box for the optimiser's projection, e.g. [0,1]^n; None if unbounded.
-    fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)>;
+    pub fn target(&self) -> Vec<f64> {
+        self.scenario.target()
+    }
+
+    /// Box for the optimiser's projection, [0, 1]^n; None if unbounded.
+    pub fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        let n = self.dim();
+        self.entry.unit_box.then(|| (vec![0.0; n], vec![1.0; n]))
+    }
+
     /// Longest path, in segments (2 = direct light only).
-    fn max_depth(&self) -> u32;
-    /// The scene at parameters `theta` (static parts are shared, built once in the constructor).
-    fn scene(&self, theta: &[f64], view: View) -> Scene;
-    /// Render the scene at parameters theta: must be cheap to call thousands of times (static geometry and its BVH built once, in the task's constructor, and shared).
-    fn render(&self, theta: &[f64], seed: u64, spp: u32, view: View) -> Image {
+    pub fn max_depth(&self) -> u32 {
+        self.entry.max_depth
+    }
+
+    /// The scene at parameters `theta` (static parts are shared, built once).
+    pub fn scene(&self, theta: &[f64], view: View) -> Scene {
+        self.scenario.scene(theta, view)
+    }
+
+    /// Render the scene at parameters theta: cheap to call thousands of times (static
+    /// geometry and its BVH are built once, when the task is made, and shared).
+    pub fn render(&self, theta: &[f64], seed: u64, spp: u32, view: View) -> Image {
         render(
             &self.scene(theta, view),
             &Settings::new(spp, seed, self.max_depth()),
@@ -115,32 +266,14 @@ pub trait Task: Send + Sync {
 }
 
 /// Every task, in the paper's order (TEXTURE last).
-pub fn all() -> Vec<Box<dyn Task>> {
-    vec![
-        Box::new(cup::Cup::new()),
-        Box::new(shadow::Shadow::new()),
-        Box::new(occlusion::Occlusion::new()),
-        Box::new(gi::Gi::new()),
-        Box::new(sort::Sort::new()),
-        Box::new(caustic::Caustic::new()),
-        Box::new(texture::TextureTask::new()),
-    ]
+pub fn all() -> Vec<Task> {
+    TASKS.iter().map(Task::new).collect()
 }
 
 /// The task called `name` (case-insensitive).
-pub fn by_name(name: &str) -> Option<Box<dyn Task>> {
+pub fn by_name(name: &str) -> Option<Task> {
     let name = name.to_ascii_lowercase();
-    let task: Box<dyn Task> = match name.as_str() {
-        "cup" => Box::new(cup::Cup::new()),
-        "shadow" => Box::new(shadow::Shadow::new()),
-        "occlusion" => Box::new(occlusion::Occlusion::new()),
-        "gi" => Box::new(gi::Gi::new()),
-        "sort" => Box::new(sort::Sort::new()),
-        "caustic" => Box::new(caustic::Caustic::new()),
-        "texture" => Box::new(texture::TextureTask::new()),
-        _ => return None,
-    };
-    Some(task)
+    TASKS.iter().find(|e| e.name == name).map(Task::new)
 }
 
 /// Plain mean of squared differences (the reported parameter error).
@@ -158,11 +291,6 @@ pub(crate) fn param(theta: &[f64], i: usize) -> f32 {
         .copied()
         .filter(|v| v.is_finite())
         .unwrap_or(0.0) as f32
-}
-
-/// The unit box [0, 1]^n.
-pub(crate) fn unit_box(n: usize) -> Option<(Vec<f64>, Vec<f64>)> {
-    Some((vec![0.0; n], vec![1.0; n]))
 }
 
 #[cfg(test)]
@@ -190,6 +318,16 @@ mod tests {
             }
         }
         assert!(by_name("nope").is_none());
+        // Every row of the paper's numbers names a task; only TEXTURE has none.
+        for (name, _) in PAPER {
+            assert!(by_name(name).is_some(), "{name}");
+        }
+        let without: Vec<_> = all()
+            .into_iter()
+            .filter(|t| t.paper().is_none())
+            .map(|t| t.name())
+            .collect();
+        assert_eq!(without, ["texture"]);
     }
 
     /// Each task renders finite, non-black images at start and target, and they differ.

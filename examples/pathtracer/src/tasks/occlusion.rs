@@ -7,18 +7,11 @@
 
 use glam::{Vec3, Vec3A};
 
-use super::{param, unit_box, Defaults, Paper, Task, View};
+use super::{param, Scenario, View};
 use crate::render::{Geometry, Lights, Material, Quad, Scene, Sphere};
 
 /// The OCCLUSION task.
 pub struct Occlusion;
-
-impl Occlusion {
-    /// The task (analytic shapes only).
-    pub fn new() -> Self {
-        Occlusion
-    }
-}
 
 /// Depth (world z) of the red sphere's centre: theta in [0, 1] spans z in [-4, 6]; the
 /// camera is at z = 8, the blue sphere at z = 3.
@@ -26,54 +19,13 @@ fn red_z(theta: f32) -> f32 {
     -3.0 + 8.0 * theta.clamp(-0.25, 1.1)
 }
 
-impl Task for Occlusion {
-    fn name(&self) -> &'static str {
-        "occlusion"
-    }
-
-    fn description(&self) -> &'static str {
-        "Move a red sphere along the viewing axis (normalised depth) from behind a blue sphere to in front of it, over a reflecting glass floor."
-    }
-
-    fn dim(&self) -> usize {
-        1
-    }
-
-    fn defaults(&self) -> Defaults {
-        Defaults {
-            samples: 2,
-            sigma0: 0.8,
-            spp: 32,
-            lr: 0.02,
-            iterations: 600,
-        }
-    }
-
-    fn paper(&self) -> Option<Paper> {
-        Some(Paper {
-            image_mse: 2.34e-4,
-            param_mse: 3.29e-3,
-            seconds_per_iteration: 0.09,
-            mitsuba_image_mse: 5.85e-2,
-            mitsuba_param_mse: 52.3,
-            sigma05: Some((2.2e-3, 7.2e-3)),
-        })
-    }
-
+impl Scenario for Occlusion {
     fn start(&self) -> Vec<f64> {
         vec![0.6]
     }
 
     fn target(&self) -> Vec<f64> {
         vec![0.85]
-    }
-
-    fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)> {
-        unit_box(1)
-    }
-
-    fn max_depth(&self) -> u32 {
-        6
     }
 
     fn scene(&self, theta: &[f64], view: View) -> Scene {

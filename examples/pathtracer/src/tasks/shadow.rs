@@ -4,67 +4,19 @@
 
 use glam::{Vec3, Vec3A};
 
-use super::{param, Defaults, Paper, Task, View};
+use super::{param, Scenario, View};
 use crate::render::{Geometry, Lights, Material, PointLight, Quad, Scene, Sphere};
 
 /// The SHADOW task.
 pub struct Shadow;
 
-impl Shadow {
-    /// The task (nothing to precompute: two analytic shapes).
-    pub fn new() -> Self {
-        Shadow
-    }
-}
-
-impl Task for Shadow {
-    fn name(&self) -> &'static str {
-        "shadow"
-    }
-
-    fn description(&self) -> &'static str {
-        "Move an out-of-view sphere (y, z offsets, world units) so that its shadow on a wall matches the reference."
-    }
-
-    fn dim(&self) -> usize {
-        2
-    }
-
-    fn defaults(&self) -> Defaults {
-        Defaults {
-            samples: 2,
-            sigma0: 0.5,
-            spp: 32,
-            lr: 0.02,
-            iterations: 400,
-        }
-    }
-
-    fn paper(&self) -> Option<Paper> {
-        Some(Paper {
-            image_mse: 1.74e-5,
-            param_mse: 1.81e-3,
-            seconds_per_iteration: 0.04,
-            mitsuba_image_mse: 1.64e-3,
-            mitsuba_param_mse: 5.06,
-            sigma05: None,
-        })
-    }
-
+impl Scenario for Shadow {
     fn start(&self) -> Vec<f64> {
         vec![-0.5, 2.5]
     }
 
     fn target(&self) -> Vec<f64> {
         vec![-1.5, 1.0]
-    }
-
-    fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)> {
-        None
-    }
-
-    fn max_depth(&self) -> u32 {
-        6
     }
 
     fn scene(&self, theta: &[f64], view: View) -> Scene {

@@ -6,7 +6,7 @@
 
 use glam::{Vec3, Vec3A};
 
-use super::{param, unit_box, Defaults, Paper, Task, View};
+use super::{param, Scenario, View};
 use crate::render::rng::hash_unit;
 use crate::render::{AaBox, BoxSet, Geometry, Lights, Material, Quad, Scene};
 
@@ -20,47 +20,7 @@ const EXTENT: f32 = 5.0;
 /// The SORT task.
 pub struct Sort;
 
-impl Sort {
-    /// The task.
-    pub fn new() -> Self {
-        Sort
-    }
-}
-
-impl Task for Sort {
-    fn name(&self) -> &'static str {
-        "sort"
-    }
-
-    fn description(&self) -> &'static str {
-        "Move 75 cubes (x, z of each, normalised: 150 parameters) from a scrambled start so that red, green and blue each fill their own vertical band."
-    }
-
-    fn dim(&self) -> usize {
-        2 * CUBES
-    }
-
-    fn defaults(&self) -> Defaults {
-        Defaults {
-            samples: 16,
-            sigma0: 0.5,
-            spp: 32,
-            lr: 0.01,
-            iterations: 4000,
-        }
-    }
-
-    fn paper(&self) -> Option<Paper> {
-        Some(Paper {
-            image_mse: 3.81e-3,
-            param_mse: 4.19e-1,
-            seconds_per_iteration: 2.23,
-            mitsuba_image_mse: 1.18e-2,
-            mitsuba_param_mse: 6.64,
-            sigma05: None,
-        })
-    }
-
+impl Scenario for Sort {
     /// Every cube at an independent pseudo-random place in [0.05, 0.95]^2 (fixed hash).
     fn start(&self) -> Vec<f64> {
         (0..2 * CUBES)
@@ -78,14 +38,6 @@ impl Task for Sort {
             theta.push((row as f64 + 0.5) / 5.0);
         }
         theta
-    }
-
-    fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)> {
-        unit_box(2 * CUBES)
-    }
-
-    fn max_depth(&self) -> u32 {
-        2
     }
 
     fn scene(&self, theta: &[f64], view: View) -> Scene {

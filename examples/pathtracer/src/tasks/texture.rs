@@ -6,21 +6,16 @@ use std::f64::consts::TAU;
 
 use glam::{Vec3, Vec3A};
 
-use super::{Defaults, Paper, Task, View};
+use super::{Scenario, View};
 use crate::render::{Geometry, Lights, Material, Quad, Scene, Texture};
 
 /// Texture side, in texels.
 pub const SIDE: u32 = 128;
+/// Parameters: RGB per texel.
+const DIM: usize = (3 * SIDE * SIDE) as usize;
 
 /// The TEXTURE task.
 pub struct TextureTask;
-
-impl TextureTask {
-    /// The task.
-    pub fn new() -> Self {
-        TextureTask
-    }
-}
 
 /// The reference texture at (u, v) in [0, 1]^2: diagonal colour waves, a checkerboard and
 /// concentric rings, so every channel has edges and gradients at several scales.
@@ -40,56 +35,21 @@ fn reference(u: f64, v: f64) -> [f64; 3] {
     ]
 }
 
-impl Task for TextureTask {
-    fn name(&self) -> &'static str {
-        "texture"
-    }
-
-    fn description(&self) -> &'static str {
-        "Recover a 128x128 RGB texture (49,152 parameters in [0,1]) on a plane under constant sky light, from flat grey."
-    }
-
-    fn dim(&self) -> usize {
-        (3 * SIDE * SIDE) as usize
-    }
-
-    /// Our choice (the paper gives none), see docs/tasks.md.
-    fn defaults(&self) -> Defaults {
-        Defaults {
-            samples: 32,
-            sigma0: 0.1,
-            spp: 4,
-            lr: 0.003,
-            iterations: 4000,
-        }
-    }
-
-    fn paper(&self) -> Option<Paper> {
-        None
-    }
-
+impl Scenario for TextureTask {
     fn start(&self) -> Vec<f64> {
-        vec![0.5; self.dim()]
+        vec![0.5; DIM]
     }
 
     /// Texel (i, j) sampled at its centre, rows top to bottom, RGB interleaved.
     fn target(&self) -> Vec<f64> {
         let n = SIDE as f64;
-        let mut theta = Vec::with_capacity(self.dim());
+        let mut theta = Vec::with_capacity(DIM);
         for j in 0..SIDE {
             for i in 0..SIDE {
                 theta.extend(reference((i as f64 + 0.5) / n, (j as f64 + 0.5) / n));
             }
         }
         theta
-    }
-
-    fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)> {
-        super::unit_box(self.dim())
-    }
-
-    fn max_depth(&self) -> u32 {
-        2
     }
 
     fn scene(&self, theta: &[f64], view: View) -> Scene {
@@ -103,7 +63,7 @@ impl Task for TextureTask {
             fov,
             (SIDE, SIDE),
         );
-        let texture = if theta.len() == self.dim() {
+        let texture = if theta.len() == DIM {
             Texture::from_rgb(SIDE, SIDE, theta)
         } else {
             Texture::from_rgb(1, 1, &[0.0, 0.0, 0.0])
