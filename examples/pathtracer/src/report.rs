@@ -48,11 +48,37 @@ pub enum Scale {
 
 /// Axes and labels of a plot.
 pub struct Axes<'a> {
+    /// Above the plot.
     pub title: &'a str,
+    /// Under the x axis.
     pub x_label: &'a str,
+    /// Beside the y axis.
     pub y_label: &'a str,
+    /// The x axis's scale.
     pub x_scale: Scale,
+    /// The y axis's scale.
     pub y_scale: Scale,
+}
+
+impl<'a> Axes<'a> {
+    /// Linear x, logarithmic y: the usual plot of an error against iterations or a setting.
+    pub fn log_y(title: &'a str, x_label: &'a str, y_label: &'a str) -> Self {
+        Axes {
+            title,
+            x_label,
+            y_label,
+            x_scale: Scale::Linear,
+            y_scale: Scale::Log,
+        }
+    }
+
+    /// Both axes logarithmic.
+    pub fn log_log(title: &'a str, x_label: &'a str, y_label: &'a str) -> Self {
+        Axes {
+            x_scale: Scale::Log,
+            ..Axes::log_y(title, x_label, y_label)
+        }
+    }
 }
 
 /// The system font plots are labelled with (Debian's fonts-dejavu-core, on every machine of

@@ -3,9 +3,9 @@
 
 use std::fmt::Write as _;
 
-use super::{final_mse, seeds_sentence, variants_on_tasks, verdict, with_range, write_page};
+use super::{final_mse, page_over_tasks, variants_on_tasks, verdict, with_range, write_page};
 use super::{Options, Variant, TIE_DECADES};
-use crate::report::{self, sci, spread, Result};
+use crate::report::{sci, spread, Result};
 use crate::run::SamplerArg;
 
 pub(super) fn run(opts: &Options) -> Result<()> {
@@ -49,14 +49,13 @@ pub(super) fn run(opts: &Options) -> Result<()> {
     rows.push(mean);
     let mut head = vec!["task", "full: param MSE"];
     head.extend(variants.iter().skip(1).map(|v| v.0));
-    let mut body = format!(
-        "Final parameter MSE of each ablation, and in brackets log10(ablation / full): positive means the ablation is worse. \"No importance sampling\" is the Gaussian sampler; \"no antithetic\" draws N independent perturbations. {}\n\n",
-        seeds_sentence(
-            opts,
-            "each cell shows the median parameter MSE over seeds and the median [min, max] of the per-seed log ratios (an ablation and the full method with the same seed form a pair); the mean row averages the medians"
-        )
+    let mut body = page_over_tasks(
+        opts,
+        "Final parameter MSE of each ablation, and in brackets log10(ablation / full): positive means the ablation is worse. \"No importance sampling\" is the Gaussian sampler; \"no antithetic\" draws N independent perturbations.",
+        "each cell shows the median parameter MSE over seeds and the median [min, max] of the per-seed log ratios (an ablation and the full method with the same seed form a pair); the mean row averages the medians",
+        &head,
+        &rows,
     );
-    body.push_str(&report::markdown_table(&head, &rows));
     let verdicts: Vec<String> = variants
         .iter()
         .zip(&verdicts)

@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 
 use super::{cache, fit_line, header, summary_csv_row, task, write_page, Options};
-use crate::report::{self, Axes, Result, Scale, Series};
+use crate::report::{self, Axes, Result, Series};
 use crate::run::Settings;
 
 pub(super) fn run(opts: &Options) -> Result<()> {
@@ -43,13 +43,11 @@ pub(super) fn run(opts: &Options) -> Result<()> {
     )?;
     report::plot(
         &opts.out.join("fig1.png"),
-        &Axes {
-            title: "SHADOW: seconds per iteration against N",
-            x_label: "N (evaluations per gradient)",
-            y_label: "seconds per iteration",
-            x_scale: Scale::Linear,
-            y_scale: Scale::Log,
-        },
+        &Axes::log_y(
+            "SHADOW: seconds per iteration against N",
+            "N (evaluations per gradient)",
+            "seconds per iteration",
+        ),
         &[
             Series::markers("measured (render + estimator + Adam)", total.clone()),
             Series::line(format!("fit {a:.4} + {b:.4} N"), fitted),

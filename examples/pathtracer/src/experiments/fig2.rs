@@ -2,7 +2,7 @@
 //! when each run reaches 1e-2 and 1e-3.
 
 use super::{cache, task, write_page, Options};
-use crate::report::{self, sci, spread, Axes, Result, Scale, Series};
+use crate::report::{self, sci, spread, Axes, Result, Series};
 use crate::run::{self, Settings};
 
 /// Parameter MSEs at which Fig. 2 times a SHADOW run: 1e-2 is reached while sigma is still
@@ -86,13 +86,11 @@ pub(super) fn run(opts: &Options) -> Result<()> {
     )?;
     report::plot(
         &opts.out.join("fig2.png"),
-        &Axes {
-            title: "SHADOW: parameter MSE against iteration (median over seeds)",
-            x_label: "iteration",
-            y_label: "parameter MSE",
-            x_scale: Scale::Linear,
-            y_scale: Scale::Log,
-        },
+        &Axes::log_y(
+            "SHADOW: parameter MSE against iteration (median over seeds)",
+            "iteration",
+            "parameter MSE",
+        ),
         &series,
     )?;
     let mut body = format!(

@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 
 use super::{cache, header, summary_csv_row, task, write_page, Options};
-use crate::report::{self, sci, spread, Axes, Result, Scale, Series};
+use crate::report::{self, sci, spread, Axes, Result, Series};
 use crate::run::Settings;
 
 /// SHADOW's own horizontal field of view (degrees): the paper's 40.
@@ -65,13 +65,11 @@ pub(super) fn run(opts: &Options) -> Result<()> {
     report::write_csv(&opts.out.join("fig3.csv"), &header(&["fov"]), csv)?;
     report::plot(
         &opts.out.join("fig3.png"),
-        &Axes {
-            title: "SHADOW: final parameter MSE against sigma0 (median over seeds)",
-            x_label: "sigma0",
-            y_label: "final parameter MSE",
-            x_scale: Scale::Linear,
-            y_scale: Scale::Log,
-        },
+        &Axes::log_y(
+            "SHADOW: final parameter MSE against sigma0 (median over seeds)",
+            "sigma0",
+            "final parameter MSE",
+        ),
         &series,
     )?;
     let mut body = format!(

@@ -253,12 +253,20 @@ fn variants_on_tasks(
     Ok(per_task)
 }
 
-/// "One seed (0) per cell." or "Seeds 0 to K-1 per cell; ...", for the pages over tasks.
-fn seeds_sentence(opts: &Options, aggregate: &str) -> String {
-    match opts.seeds(1).len() {
+/// The start of a page over tasks: `intro`, the seeds per cell (with several, how a cell
+/// aggregates them: `aggregate`), then the table.
+fn page_over_tasks(
+    opts: &Options,
+    intro: &str,
+    aggregate: &str,
+    head: &[&str],
+    rows: &[Vec<String>],
+) -> String {
+    let seeds = match opts.seeds(1).len() {
         1 => "One seed (0) per cell.".into(),
         k => format!("Seeds 0 to {} per cell; {aggregate}.", k - 1),
-    }
+    };
+    format!("{intro} {seeds}\n\n{}", report::markdown_table(head, rows))
 }
 
 /// `value` alone for one seed, `value [min, max]` for several.

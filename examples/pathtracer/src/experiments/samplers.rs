@@ -3,9 +3,9 @@
 
 use std::fmt::Write as _;
 
-use super::{final_mse, seeds_sentence, variants_on_tasks, verdict, with_range, write_page};
+use super::{final_mse, page_over_tasks, variants_on_tasks, verdict, with_range, write_page};
 use super::{Options, Variant, TIE_DECADES};
-use crate::report::{self, sci, spread, Result};
+use crate::report::{sci, spread, Result};
 use crate::run::SamplerArg;
 
 pub(super) fn run(opts: &Options) -> Result<()> {
@@ -63,14 +63,13 @@ pub(super) fn run(opts: &Options) -> Result<()> {
     }
     let mut head = vec!["task"];
     head.extend(variants.iter().map(|v| v.0));
-    let mut body = format!(
-        "Each cell: final parameter MSE / parameter MSE at the time the fastest of the three runs finished (equal time). {}\n\n",
-        seeds_sentence(
-            opts,
-            "each cell shows the median final MSE [min, max] over seeds / the median at equal time; wins are counted by the median"
-        )
+    let mut body = page_over_tasks(
+        opts,
+        "Each cell: final parameter MSE / parameter MSE at the time the fastest of the three runs finished (equal time).",
+        "each cell shows the median final MSE [min, max] over seeds / the median at equal time; wins are counted by the median",
+        &head,
+        &rows,
     );
-    body.push_str(&report::markdown_table(&head, &rows));
     let wins: Vec<String> = variants
         .iter()
         .zip(&wins)

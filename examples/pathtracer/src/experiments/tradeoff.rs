@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 
 use super::{cache, fit_line, header, summary_csv_row, task, write_page, Options};
-use crate::report::{self, sci, spread, Axes, Result, Scale, Series};
+use crate::report::{self, sci, spread, Axes, Result, Series};
 use crate::run::{self, SamplerArg, Settings};
 
 pub(super) fn run(opts: &Options) -> Result<()> {
@@ -67,16 +67,14 @@ pub(super) fn run(opts: &Options) -> Result<()> {
         let front = pareto(&points);
         report::plot(
             &opts.out.join(format!("tradeoff_{name}.png")),
-            &Axes {
-                title: &format!(
+            &Axes::log_log(
+                &format!(
                     "{}: final parameter MSE against wall time",
                     name.to_uppercase()
                 ),
-                x_label: "seconds (optimisation)",
-                y_label: "final parameter MSE",
-                x_scale: Scale::Log,
-                y_scale: Scale::Log,
-            },
+                "seconds (optimisation)",
+                "final parameter MSE",
+            ),
             &[
                 Series::markers("runs", points.clone()),
                 Series::line("Pareto front", front.iter().map(|&i| points[i]).collect()),

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use super::{write_history, Outcome, Settings};
 use crate::render::Image;
-use crate::report::{self, Axes, Result, Scale, Series};
+use crate::report::{self, Axes, Result, Series};
 use crate::tasks::Task;
 
 /// Writes the images, the strip, the plot, the CSV and the summary of a run.
@@ -40,13 +40,7 @@ pub(super) fn write_outputs(
     let title = format!("{}: {}", task.name().to_uppercase(), s.label());
     report::plot(
         &dir.join("convergence.png"),
-        &Axes {
-            title: &title,
-            x_label: "iteration",
-            y_label: "MSE",
-            x_scale: Scale::Linear,
-            y_scale: Scale::Log,
-        },
+        &Axes::log_y(&title, "iteration", "MSE"),
         &[
             Series::line(
                 "image MSE",

@@ -4,8 +4,8 @@
 
 use glam::Vec3;
 
-use super::{param, Scenario, View};
-use crate::render::{Geometry, Lights, Material, Quad, Scene, Sphere};
+use super::{param, Aim, Scenario, Shot};
+use crate::render::{Camera, Geometry, Lights, Material, Quad, Scene, Sphere};
 
 /// The CAUSTIC task.
 pub struct Caustic;
@@ -28,29 +28,12 @@ const PLATE_EXTENT: f32 = 8.0;
 const PLATE_ALBEDO: f32 = 0.0;
 /// Radiance of the plate's underside (a dim fill light, independent of theta).
 const FILL: f32 = 0.3;
-/// Camera under the plate, looking at (0, LOOK_Y, 0).
-const EYE: [f32; 3] = [0.0, 1.4, 4.5];
-const LOOK_Y: f32 = 0.0;
-const HFOV: f64 = 45.0;
+/// Camera under the plate, looking at the ground below the sphere.
+pub(super) const CAMERA: Shot = Shot::new(EYE, Aim::At(Vec3::ZERO), Vec3::Y, 45.0, (128, 96));
+const EYE: Vec3 = Vec3::new(0.0, 1.4, 4.5);
 
 impl Scenario for Caustic {
-    fn start(&self) -> Vec<f64> {
-        vec![0.5, 0.9]
-    }
-
-    fn target(&self) -> Vec<f64> {
-        vec![0.3, 0.35]
-    }
-
-    fn scene(&self, theta: &[f64], view: View) -> Scene {
-        let eye = Vec3::new(EYE[0], EYE[1], EYE[2]);
-        let camera = view.camera(
-            eye,
-            Vec3::new(0.0, LOOK_Y, 0.0) - eye,
-            Vec3::Y,
-            HFOV,
-            (128, 96),
-        );
+    fn scene(&self, theta: &[f64], camera: Camera) -> Scene {
         let lamp = Vec3::new(
             -LIGHT_RANGE + 2.0 * LIGHT_RANGE * param(theta, 0),
             LIGHT_HEIGHT,
@@ -103,5 +86,13 @@ impl Scenario for Caustic {
             textures: vec![],
             lights,
         }
+    }
+
+    fn start(&self) -> Vec<f64> {
+        vec![0.5, 0.9]
+    }
+
+    fn target(&self) -> Vec<f64> {
+        vec![0.3, 0.35]
     }
 }

@@ -10,15 +10,20 @@ use std::sync::Arc;
 use glam::{Vec3, Vec3A};
 use obvhs::triangle::Triangle;
 
-use super::{param, Scenario, View};
+use super::{param, Aim, Scenario, Shot};
 use crate::render::{
-    BvhKind, Geometry, Lights, Material, Mesh, MeshInstance, PointLight, Quad, Scene,
+    BvhKind, Camera, Geometry, Lights, Material, Mesh, MeshInstance, PointLight, Quad, Scene,
 };
 
 const OUTER: f32 = 0.6;
 const INNER: f32 = 0.5;
 const HEIGHT: f32 = 1.2;
 const FLOOR: f32 = 0.08;
+
+/// Looking slightly down at the mug from the front.
+pub(super) const CAMERA: Shot = Shot::new(EYE, Aim::At(LOOK), Vec3::Y, 30.0, (128, 96));
+const EYE: Vec3 = Vec3::new(0.0, 1.9, 5.0);
+const LOOK: Vec3 = Vec3::new(0.0, 0.55, 0.0);
 
 /// The CUP task: the mug mesh and its BVH are built once here.
 pub struct Cup {
@@ -60,43 +65,33 @@ fn quad_tris(out: &mut Vec<Triangle>, a: Vec3, b: Vec3, c: Vec3, d: Vec3) {
 pub fn mug_triangles() -> Vec<Triangle> {
     const SEGMENTS: usize = 64;
     let mut tris = Vec::new();
-    let ring = |r: f32, y: f32, i: usize| {
+    let ring = |(r, y, i): (f32, f32, usize)| {
         let a = TAU * i as f32 / SEGMENTS as f32;
         Vec3::new(r * a.cos(), y, r * a.sin())
     };
     for i in 0..SEGMENTS {
         let j = i + 1;
-        // Outer and inner walls, rim, inner and outer bottoms.
-        quad_tris(
-            &mut tris,
-            ring(OUTER, 0.0, i),
-            ring(OUTER, HEIGHT, i),
-            ring(OUTER, HEIGHT, j),
-            ring(OUTER, 0.0, j),
-        );
-        quad_tris(
-            &mut tris,
-            ring(INNER, FLOOR, i),
-            ring(INNER, FLOOR, j),
-            ring(INNER, HEIGHT, j),
-            ring(INNER, HEIGHT, i),
-        );
-        quad_tris(
-            &mut tris,
-            ring(INNER, HEIGHT, i),
-            ring(INNER, HEIGHT, j),
-            ring(OUTER, HEIGHT, j),
-            ring(OUTER, HEIGHT, i),
-        );
+        // Outer wall, inner wall and rim between the segment's edges i and j, each a quad
+        // (a, b, c, d) counter-clockwise seen from the side it faces; then the inner and
+        // outer bottoms.
+        #[rustfmt::skip]
+        let bands = [
+            [(OUTER, 0.0, i),    (OUTER, HEIGHT, i), (OUTER, HEIGHT, j), (OUTER, 0.0, j)],
+            [(INNER, FLOOR, i),  (INNER, FLOOR, j),  (INNER, HEIGHT, j), (INNER, HEIGHT, i)],
+            [(INNER, HEIGHT, i), (INNER, HEIGHT, j), (OUTER, HEIGHT, j), (OUTER, HEIGHT, i)],
+        ];
+        for [a, b, c, d] in bands {
+            quad_tris(&mut tris, ring(a), ring(b), ring(c), ring(d));
+        }
         tris.push(Triangle {
             v0: Vec3A::new(0.0, FLOOR, 0.0),
-            v1: ring(INNER, FLOOR, i).into(),
-            v2: ring(INNER, FLOOR, j).into(),
+            v1: ring((INNER, FLOOR, i)).into(),
+            v2: ring((INNER, FLOOR, j)).into(),
         });
         tris.push(Triangle {
             v0: Vec3A::ZERO,
-            v1: ring(OUTER, 0.0, j).into(),
-            v2: ring(OUTER, 0.0, i).into(),
+            v1: ring((OUTER, 0.0, j)).into(),
+            v2: ring((OUTER, 0.0, i)).into(),
         });
     }
     // Handle: a tube of radius `tube` around an arc of radius `major` centred beside the wall.
@@ -125,22 +120,7 @@ pub fn mug_triangles() -> Vec<Triangle> {
 }
 
 impl Scenario for Cup {
-    fn start(&self) -> Vec<f64> {
-        vec![0.5]
-    }
-
-    fn target(&self) -> Vec<f64> {
-        vec![0.25]
-    }
-
-    fn scene(&self, theta: &[f64], view: View) -> Scene {
-        let camera = view.camera(
-            Vec3::new(0.0, 1.9, 5.0),
-            Vec3::new(0.0, 0.55, 0.0) - Vec3::new(0.0, 1.9, 5.0),
-            Vec3::Y,
-            30.0,
-            (128, 96),
-        );
+    fn scene(&self, theta: &[f64], camera: Camera) -> Scene {
         // theta = 0.25 puts the handle on +x (image right); 0.5 turns it away from the camera.
         let angle = TAU * (param(theta, 0) - 0.25);
         let mut quads = vec![
@@ -182,5 +162,13 @@ impl Scenario for Cup {
             textures: vec![],
             lights,
         }
+    }
+
+    fn start(&self) -> Vec<f64> {
+        vec![0.5]
+    }
+
+    fn target(&self) -> Vec<f64> {
+        vec![0.25]
     }
 }

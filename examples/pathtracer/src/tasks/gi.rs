@@ -5,8 +5,8 @@ use std::f32::consts::FRAC_PI_2;
 
 use glam::{Vec3, Vec3A};
 
-use super::{param, Scenario, View};
-use crate::render::{Geometry, Lights, Material, OrientedBox, Quad, Scene};
+use super::{param, Aim, Scenario, Shot};
+use crate::render::{Camera, Geometry, Lights, Material, OrientedBox, Quad, Scene};
 
 /// The GI task.
 pub struct Gi;
@@ -16,23 +16,12 @@ pub struct Gi;
 /// right), so the image's left edge is the plane x = -0.9: the left wall (x = -1) is never in
 /// view, while the floor beside it, the back wall's left part and the tall box's left face,
 /// the surfaces the wall lights most, are. The frustum's top stays below the ceiling.
-const EYE: [f32; 3] = [-0.9, 0.9, 3.2];
-const LOOK: [f32; 3] = [0.146, 0.6, -1.0];
-const HFOV: f64 = 28.0;
+pub(super) const CAMERA: Shot = Shot::new(EYE, Aim::At(LOOK), Vec3::Y, 28.0, (128, 128));
+const EYE: Vec3 = Vec3::new(-0.9, 0.9, 3.2);
+const LOOK: Vec3 = Vec3::new(0.146, 0.6, -1.0);
 
 impl Scenario for Gi {
-    /// [light x, light z, left wall r, g, b, tall-box rotation].
-    fn start(&self) -> Vec<f64> {
-        vec![0.2, 0.8, 0.2, 0.5, 0.8, 0.7]
-    }
-
-    fn target(&self) -> Vec<f64> {
-        vec![0.5, 0.5, 0.8, 0.1, 0.1, 0.3]
-    }
-
-    fn scene(&self, theta: &[f64], view: View) -> Scene {
-        let eye = Vec3::from(EYE);
-        let camera = view.camera(eye, Vec3::from(LOOK) - eye, Vec3::Y, HFOV, (128, 128));
+    fn scene(&self, theta: &[f64], camera: Camera) -> Scene {
         let p = |i| param(theta, i);
         let wall = |i| p(i).clamp(0.0, 1.0);
         // Box [-1, 1] x [0, 2] x [-1, 1], open at +z.
@@ -90,5 +79,14 @@ impl Scenario for Gi {
             textures: vec![],
             lights,
         }
+    }
+
+    /// [light x, light z, left wall r, g, b, tall-box rotation].
+    fn start(&self) -> Vec<f64> {
+        vec![0.2, 0.8, 0.2, 0.5, 0.8, 0.7]
+    }
+
+    fn target(&self) -> Vec<f64> {
+        vec![0.5, 0.5, 0.8, 0.1, 0.1, 0.3]
     }
 }

@@ -27,14 +27,14 @@ use crate::render::{render, Camera, Scene, Settings};
 /// (supplemental Table 1; TEXTURE's are ours, see docs/tasks.md).
 #[rustfmt::skip]
 const TASKS: [Entry; 7] = [
-    //         name         scene                                 depth  unit box  N  sigma0  spp  LR     iterations
-    Entry::new("cup",       || Box::new(cup::Cup::new()),             4, true,  Defaults::new(2,  0.25,  16, 0.01,  400)),
-    Entry::new("shadow",    || Box::new(shadow::Shadow),              6, false, Defaults::new(2,  0.5,   32, 0.02,  400)),
-    Entry::new("occlusion", || Box::new(occlusion::Occlusion),        6, true,  Defaults::new(2,  0.8,   32, 0.02,  600)),
-    Entry::new("gi",        || Box::new(gi::Gi),                      6, true,  Defaults::new(4,  0.125, 16, 0.05,  500)),
-    Entry::new("sort",      || Box::new(sort::Sort),                  2, true,  Defaults::new(16, 0.5,   32, 0.01,  4000)),
-    Entry::new("caustic",   || Box::new(caustic::Caustic),            8, true,  Defaults::new(4,  0.125, 32, 0.01,  500)),
-    Entry::new("texture",   || Box::new(texture::TextureTask),        2, true,  Defaults::new(32, 0.1,   4,  0.003, 4000)),
+    //         name         scenario                               camera             depth unit box    N   sigma0 spp LR     iterations
+    ("cup",       || Box::new(cup::Cup::new()),          cup::CAMERA,       4, true,  Defaults::new(2,  0.25,  16, 0.01,  400)),
+    ("shadow",    || Box::new(shadow::Shadow),           shadow::CAMERA,    6, false, Defaults::new(2,  0.5,   32, 0.02,  400)),
+    ("occlusion", || Box::new(occlusion::Occlusion),     occlusion::CAMERA, 6, true,  Defaults::new(2,  0.8,   32, 0.02,  600)),
+    ("gi",        || Box::new(gi::Gi),                   gi::CAMERA,        6, true,  Defaults::new(4,  0.125, 16, 0.05,  500)),
+    ("sort",      || Box::new(sort::Sort),               sort::CAMERA,      2, true,  Defaults::new(16, 0.5,   32, 0.01,  4000)),
+    ("caustic",   || Box::new(caustic::Caustic),         caustic::CAMERA,   8, true,  Defaults::new(4,  0.125, 32, 0.01,  500)),
+    ("texture",   || Box::new(texture::TextureTask),     texture::CAMERA,   2, true,  Defaults::new(32, 0.1,   4,  0.003, 4000)),
 ];
 
 /// The paper's results for its black-box estimator, by task: image MSE, parameter MSE, GPU
@@ -59,37 +59,20 @@ pub trait Scenario: Send + Sync {
     fn start(&self) -> Vec<f64>;
     /// The parameters of the reference image.
     fn target(&self) -> Vec<f64>;
-    /// The scene at parameters `theta` (static parts are shared, built once in the
-    /// constructor); `view` adjusts the task's camera.
-    fn scene(&self, theta: &[f64], view: View) -> Scene;
+    /// The scene at parameters `theta` seen by `camera` (the task's [`Shot`] after the
+    /// [`View`]'s overrides); static parts are shared, built once in the constructor.
+    fn scene(&self, theta: &[f64], camera: Camera) -> Scene;
 }
 
-/// A row of [`TASKS`].
-struct Entry {
-    name: &'static str,
-    scenario: fn() -> Box<dyn Scenario>,
-    max_depth: u32,
-    unit_box: bool,
-    defaults: Defaults,
-}
-
-impl Entry {
-    const fn new(
-        name: &'static str,
-        scenario: fn() -> Box<dyn Scenario>,
-        max_depth: u32,
-        unit_box: bool,
-        defaults: Defaults,
-    ) -> Self {
-        Entry {
-            name,
-            scenario,
-            max_depth,
-            unit_box,
-            defaults,
-        }
-    }
-}
+/// A row of [`TASKS`]: name, scenario, camera, max depth, unit box, defaults.
+type Entry = (
+    &'static str,
+    fn() -> Box<dyn Scenario>,
+    Shot,
+    u32,
+    bool,
+    Defaults,
+);
 
 /// Supplemental Table 1 hyperparameters of a task.
 #[derive(Clone, Copy, Debug)]
@@ -166,49 +149,85 @@ pub struct View {
     pub scale: Option<f64>,
 }
 
-impl View {
-    /// The task's pinhole camera with this view's overrides applied.
-    pub fn camera(
-        &self,
-        position: Vec3,
-        direction: Vec3,
-        up: Vec3,
-        hfov_degrees: f64,
-        (width, height): (u32, u32),
-    ) -> Camera {
-        let scale = self
+/// Where a camera looks: along a direction, or at a point.
+#[derive(Clone, Copy, Debug)]
+pub enum Aim {
+    /// This direction.
+    Along(Vec3),
+    /// This point.
+    At(Vec3),
+}
+
+/// A task's pinhole camera: position, aim, up, horizontal field of view (degrees) and
+/// resolution (pixels); a [`View`] may replace the field of view and scale the resolution.
+#[derive(Clone, Copy, Debug)]
+pub struct Shot {
+    eye: Vec3,
+    aim: Aim,
+    up: Vec3,
+    hfov_degrees: f64,
+    size: (u32, u32),
+}
+
+impl Shot {
+    /// The camera at `eye` aimed by `aim`.
+    pub const fn new(eye: Vec3, aim: Aim, up: Vec3, hfov_degrees: f64, size: (u32, u32)) -> Self {
+        Shot {
+            eye,
+            aim,
+            up,
+            hfov_degrees,
+            size,
+        }
+    }
+
+    /// The camera with `view`'s overrides applied.
+    pub fn camera(&self, view: View) -> Camera {
+        let scale = view
             .scale
             .filter(|s| s.is_finite() && *s > 0.0)
             .unwrap_or(1.0);
         let px = |n: u32| ((n as f64 * scale).round() as u32).max(1);
+        let direction = match self.aim {
+            Aim::Along(direction) => direction,
+            Aim::At(point) => point - self.eye,
+        };
         Camera::new(
-            position,
+            self.eye,
             direction,
-            up,
-            self.fov_degrees.unwrap_or(hfov_degrees),
-            px(width),
-            px(height),
+            self.up,
+            view.fov_degrees.unwrap_or(self.hfov_degrees),
+            px(self.size.0),
+            px(self.size.1),
         )
     }
 }
 
 /// One inverse-rendering task of the paper: its row of [`TASKS`] and its scene.
 pub struct Task {
-    entry: &'static Entry,
+    name: &'static str,
     scenario: Box<dyn Scenario>,
+    camera: Shot,
+    max_depth: u32,
+    unit_box: bool,
+    defaults: Defaults,
 }
 
 impl Task {
-    fn new(entry: &'static Entry) -> Self {
+    fn new(&(name, scenario, camera, max_depth, unit_box, defaults): &Entry) -> Self {
         Task {
-            entry,
-            scenario: (entry.scenario)(),
+            name,
+            scenario: scenario(),
+            camera,
+            max_depth,
+            unit_box,
+            defaults,
         }
     }
 
     /// Short name: "cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture".
     pub fn name(&self) -> &'static str {
-        self.entry.name
+        self.name
     }
 
     /// Number of parameters.
@@ -218,7 +237,7 @@ impl Task {
 
     /// Supplemental Table 1 hyperparameters (TEXTURE: ours, see docs/tasks.md).
     pub fn defaults(&self) -> Defaults {
-        self.entry.defaults
+        self.defaults
     }
 
     /// The paper's numbers; None for TEXTURE (no table entry).
@@ -242,17 +261,17 @@ impl Task {
     /// Box for the optimiser's projection, [0, 1]^n; None if unbounded.
     pub fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)> {
         let n = self.dim();
-        self.entry.unit_box.then(|| (vec![0.0; n], vec![1.0; n]))
+        self.unit_box.then(|| (vec![0.0; n], vec![1.0; n]))
     }
 
     /// Longest path, in segments (2 = direct light only).
     pub fn max_depth(&self) -> u32 {
-        self.entry.max_depth
+        self.max_depth
     }
 
     /// The scene at parameters `theta` (static parts are shared, built once).
     pub fn scene(&self, theta: &[f64], view: View) -> Scene {
-        self.scenario.scene(theta, view)
+        self.scenario.scene(theta, self.camera.camera(view))
     }
 
     /// Render the scene at parameters theta: cheap to call thousands of times (static
@@ -273,7 +292,7 @@ pub fn all() -> Vec<Task> {
 /// The task called `name` (case-insensitive).
 pub fn by_name(name: &str) -> Option<Task> {
     let name = name.to_ascii_lowercase();
-    TASKS.iter().find(|e| e.name == name).map(Task::new)
+    TASKS.iter().find(|e| e.0 == name).map(Task::new)
 }
 
 /// Plain mean of squared differences (the reported parameter error).

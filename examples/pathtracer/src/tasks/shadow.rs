@@ -4,29 +4,19 @@
 
 use glam::{Vec3, Vec3A};
 
-use super::{param, Scenario, View};
-use crate::render::{Geometry, Lights, Material, PointLight, Quad, Scene, Sphere};
+use super::{param, Aim, Scenario, Shot};
+use crate::render::{Camera, Geometry, Lights, Material, PointLight, Quad, Scene, Sphere};
+
+/// The authors' camera: along -x with +z up (image right = +y), 40 degrees.
+pub(super) const CAMERA: Shot = Shot::new(EYE, Aim::Along(Vec3::NEG_X), Vec3::Z, HFOV, (256, 192));
+const EYE: Vec3 = Vec3::new(17.658, 0.0, 0.0);
+const HFOV: f64 = 39.597755;
 
 /// The SHADOW task.
 pub struct Shadow;
 
 impl Scenario for Shadow {
-    fn start(&self) -> Vec<f64> {
-        vec![-0.5, 2.5]
-    }
-
-    fn target(&self) -> Vec<f64> {
-        vec![-1.5, 1.0]
-    }
-
-    fn scene(&self, theta: &[f64], view: View) -> Scene {
-        let camera = view.camera(
-            Vec3::new(17.658, 0.0, 0.0),
-            Vec3::NEG_X,
-            Vec3::Z,
-            39.597755,
-            (256, 192),
-        );
+    fn scene(&self, theta: &[f64], camera: Camera) -> Scene {
         let center = Vec3::new(13.57, 8.05 + param(theta, 0), -2.0 + param(theta, 1));
         Scene {
             camera,
@@ -56,5 +46,13 @@ impl Scenario for Shadow {
                 ..Default::default()
             },
         }
+    }
+
+    fn start(&self) -> Vec<f64> {
+        vec![-0.5, 2.5]
+    }
+
+    fn target(&self) -> Vec<f64> {
+        vec![-1.5, 1.0]
     }
 }

@@ -6,9 +6,9 @@
 
 use glam::{Vec3, Vec3A};
 
-use super::{param, Scenario, View};
+use super::{param, Aim, Scenario, Shot};
 use crate::render::rng::hash_unit;
-use crate::render::{AaBox, BoxSet, Geometry, Lights, Material, Quad, Scene};
+use crate::render::{AaBox, BoxSet, Camera, Geometry, Lights, Material, Quad, Scene};
 
 /// Number of cubes (three groups of 25).
 pub const CUBES: usize = 75;
@@ -17,38 +17,16 @@ const GROUP: usize = 25;
 const HALF: f32 = 0.15;
 const EXTENT: f32 = 5.0;
 
+/// Straight down; image up is -z, so image right is +x.
+pub(super) const CAMERA: Shot =
+    Shot::new(EYE, Aim::Along(Vec3::NEG_Y), Vec3::NEG_Z, 26.3, (64, 64));
+const EYE: Vec3 = Vec3::new(0.0, 12.0, 0.0);
+
 /// The SORT task.
 pub struct Sort;
 
 impl Scenario for Sort {
-    /// Every cube at an independent pseudo-random place in [0.05, 0.95]^2 (fixed hash).
-    fn start(&self) -> Vec<f64> {
-        (0..2 * CUBES)
-            .map(|i| 0.05 + 0.9 * hash_unit(0x5027, i as u64))
-            .collect()
-    }
-
-    /// Group g (cubes 25g .. 25g + 24) on a 5 x 5 grid in the band x in [g/3, (g+1)/3].
-    fn target(&self) -> Vec<f64> {
-        let mut theta = Vec::with_capacity(2 * CUBES);
-        for k in 0..CUBES {
-            let (g, j) = (k / GROUP, k % GROUP);
-            let (col, row) = (j % 5, j / 5);
-            theta.push((5 * g + col) as f64 / 15.0 + 0.5 / 15.0);
-            theta.push((row as f64 + 0.5) / 5.0);
-        }
-        theta
-    }
-
-    fn scene(&self, theta: &[f64], view: View) -> Scene {
-        // Straight down; image up is -z, so image right is +x.
-        let camera = view.camera(
-            Vec3::new(0.0, 12.0, 0.0),
-            Vec3::NEG_Y,
-            Vec3::NEG_Z,
-            26.3,
-            (64, 64),
-        );
+    fn scene(&self, theta: &[f64], camera: Camera) -> Scene {
         let boxes: Vec<AaBox> = (0..CUBES)
             .map(|k| {
                 let c = Vec3A::new(
@@ -88,5 +66,24 @@ impl Scenario for Sort {
                 ..Default::default()
             },
         }
+    }
+
+    /// Every cube at an independent pseudo-random place in [0.05, 0.95]^2 (fixed hash).
+    fn start(&self) -> Vec<f64> {
+        (0..2 * CUBES)
+            .map(|i| 0.05 + 0.9 * hash_unit(0x5027, i as u64))
+            .collect()
+    }
+
+    /// Group g (cubes 25g .. 25g + 24) on a 5 x 5 grid in the band x in [g/3, (g+1)/3].
+    fn target(&self) -> Vec<f64> {
+        let mut theta = Vec::with_capacity(2 * CUBES);
+        for k in 0..CUBES {
+            let (g, j) = (k / GROUP, k % GROUP);
+            let (col, row) = (j % 5, j / 5);
+            theta.push((5 * g + col) as f64 / 15.0 + 0.5 / 15.0);
+            theta.push((row as f64 + 0.5) / 5.0);
+        }
+        theta
     }
 }

@@ -6,13 +6,22 @@ use std::f64::consts::TAU;
 
 use glam::{Vec3, Vec3A};
 
-use super::{Scenario, View};
-use crate::render::{Geometry, Lights, Material, Quad, Scene, Texture};
+use super::{Aim, Scenario, Shot};
+use crate::render::{Camera, Geometry, Lights, Material, Quad, Scene, Texture};
 
 /// Texture side, in texels.
 pub const SIDE: u32 = 128;
 /// Parameters: RGB per texel.
 const DIM: usize = (3 * SIDE * SIDE) as usize;
+
+/// From z = DISTANCE the plane [-1, 1]^2 at z = 0 exactly fills a SIDE x SIDE view, a texel
+/// per pixel: the field of view is 2 atan(1 / DISTANCE) (a literal, as `atan` is not `const`;
+/// a test checks it).
+pub(super) const CAMERA: Shot =
+    Shot::new(EYE, Aim::Along(Vec3::NEG_Z), Vec3::Y, HFOV, (SIDE, SIDE));
+const DISTANCE: f32 = 10.0;
+const EYE: Vec3 = Vec3::new(0.0, 0.0, DISTANCE);
+const HFOV: f64 = 11.421186274999286;
 
 /// The TEXTURE task.
 pub struct TextureTask;
@@ -36,33 +45,7 @@ fn reference(u: f64, v: f64) -> [f64; 3] {
 }
 
 impl Scenario for TextureTask {
-    fn start(&self) -> Vec<f64> {
-        vec![0.5; DIM]
-    }
-
-    /// Texel (i, j) sampled at its centre, rows top to bottom, RGB interleaved.
-    fn target(&self) -> Vec<f64> {
-        let n = SIDE as f64;
-        let mut theta = Vec::with_capacity(DIM);
-        for j in 0..SIDE {
-            for i in 0..SIDE {
-                theta.extend(reference((i as f64 + 0.5) / n, (j as f64 + 0.5) / n));
-            }
-        }
-        theta
-    }
-
-    fn scene(&self, theta: &[f64], view: View) -> Scene {
-        // The plane [-1, 1]^2 at z = 0 exactly fills a 128 x 128 view: a texel per pixel.
-        let distance = 10.0f32;
-        let fov = 2.0 * (1.0 / distance as f64).atan().to_degrees();
-        let camera = view.camera(
-            Vec3::new(0.0, 0.0, distance),
-            Vec3::NEG_Z,
-            Vec3::Y,
-            fov,
-            (SIDE, SIDE),
-        );
+    fn scene(&self, theta: &[f64], camera: Camera) -> Scene {
         let texture = if theta.len() == DIM {
             Texture::from_rgb(SIDE, SIDE, theta)
         } else {
@@ -91,5 +74,31 @@ impl Scenario for TextureTask {
                 ..Default::default()
             },
         }
+    }
+
+    fn start(&self) -> Vec<f64> {
+        vec![0.5; DIM]
+    }
+
+    /// Texel (i, j) sampled at its centre, rows top to bottom, RGB interleaved.
+    fn target(&self) -> Vec<f64> {
+        let n = SIDE as f64;
+        let mut theta = Vec::with_capacity(DIM);
+        for j in 0..SIDE {
+            for i in 0..SIDE {
+                theta.extend(reference((i as f64 + 0.5) / n, (j as f64 + 0.5) / n));
+            }
+        }
+        theta
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn field_of_view_fits_the_plane() {
+        assert_eq!(HFOV, 2.0 * (1.0 / DISTANCE as f64).atan().to_degrees());
     }
 }
