@@ -28,6 +28,11 @@ impl Material {
             texture: None,
         }
     }
+
+    /// An untextured grey Lambertian material: the walls, floors and black backs of lights.
+    pub fn grey(albedo: f32) -> Self {
+        Material::diffuse(albedo, albedo, albedo)
+    }
 }
 
 /// An RGB texture, sampled bilinearly with clamp-to-edge; v = 0 is the first row.

@@ -27,8 +27,8 @@ fn furnace(material: Material, environment_nee: bool) -> Scene {
 #[test]
 fn white_furnace_diffuse_and_glass() {
     let cases = [
-        (Material::diffuse(1.0, 1.0, 1.0), true),
-        (Material::diffuse(1.0, 1.0, 1.0), false),
+        (Material::grey(1.0), true),
+        (Material::grey(1.0), false),
         (Material::Dielectric { ior: 1.5 }, true),
     ];
     for (material, env_nee) in cases {
@@ -83,35 +83,51 @@ fn point_light_irradiance_on_diffuse_plane() {
     }
 }
 
-fn area_light_scene() -> Scene {
+/// A grey floor (z = 0, `floor` on a side) lit by a unit-square area light facing down at
+/// `light`, with a sphere of `material` on it, seen by `camera`.
+fn lit_floor(
+    camera: Camera,
+    floor: f32,
+    (light, radiance): (Vec3, f32),
+    sphere: (Vec3, f32),
+    material: Material,
+) -> Scene {
     let mut quads = vec![Quad::centered(
         Vec3::ZERO,
-        Vec3::X * 10.0,
-        Vec3::Y * 10.0,
+        Vec3::X * floor,
+        Vec3::Y * floor,
         0,
     )];
     let mut lights = Lights::default();
     // Facing down (-z): u x v = x x (-y) = -z.
     lights.add_area(
         &mut quads,
-        Quad::centered(Vec3::new(0.5, 0.0, 2.0), Vec3::X, Vec3::NEG_Y, 1),
-        Vec3::splat(6.0),
+        Quad::centered(light, Vec3::X, Vec3::NEG_Y, 1),
+        Vec3::splat(radiance),
     );
+    let (center, radius) = sphere;
     Scene {
-        camera: Camera::look_at(Vec3::new(0.0, -6.0, 4.0), Vec3::ZERO, Vec3::Z, 50.0, 48, 48),
+        camera,
         geometry: Geometry {
             quads,
-            spheres: vec![Sphere::new(Vec3::new(-0.3, 0.2, 0.7), 0.7, 2)],
+            spheres: vec![Sphere::new(center, radius, 2)],
             ..Default::default()
         },
-        materials: vec![
-            Material::diffuse(0.8, 0.8, 0.8),
-            Material::diffuse(0.0, 0.0, 0.0),
-            Material::diffuse(0.7, 0.3, 0.2),
-        ],
+        materials: vec![Material::grey(0.8), Material::grey(0.0), material],
         textures: vec![],
         lights,
     }
+}
+
+/// A diffuse sphere beside a small area light, seen from the side.
+fn area_light_scene() -> Scene {
+    lit_floor(
+        Camera::look_at(Vec3::new(0.0, -6.0, 4.0), Vec3::ZERO, Vec3::Z, 50.0, 48, 48),
+        10.0,
+        (Vec3::new(0.5, 0.0, 2.0), 6.0),
+        (Vec3::new(-0.3, 0.2, 0.7), 0.7),
+        Material::diffuse(0.7, 0.3, 0.2),
+    )
 }
 
 /// NEE + MIS and pure BSDF sampling estimate the same image: means over four quadrants
@@ -170,34 +186,14 @@ fn deterministic_across_thread_counts() {
 /// focused spot below the sphere is brighter than the unfocused floor beside it.
 #[test]
 fn glass_sphere_focuses_a_caustic() {
-    let mut quads = vec![Quad::centered(
-        Vec3::ZERO,
-        Vec3::X * 20.0,
-        Vec3::Y * 20.0,
-        0,
-    )];
-    let mut lights = Lights::default();
-    lights.add_area(
-        &mut quads,
-        Quad::centered(Vec3::new(0.0, 0.0, 6.0), Vec3::X, Vec3::NEG_Y, 1),
-        Vec3::splat(40.0),
-    );
-    let scene = Scene {
+    let scene = lit_floor(
         // Looking straight down from between the sphere and the light.
-        camera: Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, Vec3::Y, 90.0, 32, 32),
-        geometry: Geometry {
-            quads,
-            spheres: vec![Sphere::new(Vec3::new(0.0, 0.0, 1.0), 0.5, 2)],
-            ..Default::default()
-        },
-        materials: vec![
-            Material::diffuse(0.8, 0.8, 0.8),
-            Material::diffuse(0.0, 0.0, 0.0),
-            Material::Dielectric { ior: 1.5 },
-        ],
-        textures: vec![],
-        lights,
-    };
+        Camera::look_at(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, Vec3::Y, 90.0, 32, 32),
+        20.0,
+        (Vec3::new(0.0, 0.0, 6.0), 40.0),
+        (Vec3::new(0.0, 0.0, 1.0), 0.5),
+        Material::Dielectric { ior: 1.5 },
+    );
     let img = render(&scene, &Settings::new(64, 1, 8));
     assert!(img.data.iter().all(|v| v.is_finite() && *v >= 0.0));
     // The sphere covers the centre; the edge of the image sees open floor.

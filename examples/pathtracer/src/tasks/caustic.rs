@@ -79,8 +79,8 @@ impl Scenario for Caustic {
                 ..Default::default()
             },
             materials: vec![
-                Material::diffuse(0.8, 0.8, 0.8),
-                Material::diffuse(PLATE_ALBEDO, PLATE_ALBEDO, PLATE_ALBEDO),
+                Material::grey(0.8),
+                Material::grey(PLATE_ALBEDO),
                 Material::Dielectric { ior: 1.5 },
             ],
             textures: vec![],

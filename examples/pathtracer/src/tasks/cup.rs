@@ -154,10 +154,10 @@ impl Scenario for Cup {
                 ..Default::default()
             },
             materials: vec![
-                Material::diffuse(0.55, 0.55, 0.55),
+                Material::grey(0.55),
                 Material::diffuse(0.6, 0.65, 0.75),
                 Material::diffuse(0.85, 0.45, 0.15),
-                Material::diffuse(0.0, 0.0, 0.0),
+                Material::grey(0.0),
             ],
             textures: vec![],
             lights,

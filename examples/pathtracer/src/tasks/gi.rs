@@ -68,13 +68,13 @@ impl Scenario for Gi {
                 ..Default::default()
             },
             materials: vec![
-                Material::diffuse(0.75, 0.75, 0.75),
+                Material::grey(0.75),
                 Material::Diffuse {
                     albedo: Vec3A::new(wall(2), wall(3), wall(4)),
                     texture: None,
                 },
                 Material::diffuse(0.15, 0.6, 0.15),
-                Material::diffuse(0.0, 0.0, 0.0),
+                Material::grey(0.0),
             ],
             textures: vec![],
             lights,

@@ -54,12 +54,12 @@ impl Scenario for Occlusion {
             },
             materials: vec![
                 Material::Dielectric { ior: 1.5 },
-                Material::diffuse(0.03, 0.03, 0.03),
-                Material::diffuse(0.75, 0.75, 0.75),
+                Material::grey(0.03),
+                Material::grey(0.75),
                 Material::diffuse(0.7, 0.68, 0.6),
                 Material::diffuse(0.08, 0.12, 0.8),
                 Material::diffuse(0.85, 0.06, 0.05),
-                Material::diffuse(0.0, 0.0, 0.0),
+                Material::grey(0.0),
             ],
             textures: vec![],
             lights: Lights {

@@ -31,10 +31,7 @@ impl Scenario for Shadow {
                 spheres: vec![Sphere::new(center, 0.5, 1)],
                 ..Default::default()
             },
-            materials: vec![
-                Material::diffuse(0.7, 0.7, 0.7),
-                Material::diffuse(0.8, 0.262, 0.0415),
-            ],
+            materials: vec![Material::grey(0.7), Material::diffuse(0.8, 0.262, 0.0415)],
             textures: vec![],
             lights: Lights {
                 points: vec![PointLight::new(

@@ -54,7 +54,7 @@ impl Scenario for Sort {
                 ..Default::default()
             },
             materials: vec![
-                Material::diffuse(0.6, 0.6, 0.6),
+                Material::grey(0.6),
                 Material::diffuse(0.85, 0.1, 0.08),
                 Material::diffuse(0.1, 0.7, 0.12),
                 Material::diffuse(0.08, 0.15, 0.85),
