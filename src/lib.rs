@@ -50,17 +50,19 @@
 //! # Ok::<(), plateau::Error>(())
 //! ```
 
-#![warn(missing_docs)]
+#![warn(missing_docs, missing_debug_implementations)]
 
 mod adam;
 mod anneal;
 pub mod baseline;
+mod check;
 mod error;
 mod estimator;
 pub mod kernel;
 mod objective;
 mod optimize;
 mod sampling;
+pub mod seeding;
 
 pub use adam::Adam;
 pub use anneal::{Annealer, Schedule, PAPER_SIGMA_MIN, PAPER_WARMUP};
