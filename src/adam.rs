@@ -1,6 +1,7 @@
 //! `Adam`: the optimiser the paper uses, with optional box bounds.
 
-use crate::error::{check_len, check_positive, Error};
+use crate::check;
+use crate::error::Error;
 
 /// Adam (Kingma and Ba, 2015) with bias correction and optional box bounds: after each step
 /// every coordinate is projected into `[lower_i, upper_i]`.
@@ -32,7 +33,7 @@ impl Adam {
     /// # Errors
     /// `lr` not finite and positive.
     pub fn new(lr: f64) -> Result<Self, Error> {
-        check_positive("lr", lr)?;
+        check::positive("lr", lr)?;
         Ok(Adam {
             lr,
             beta1: 0.9,
@@ -50,15 +51,8 @@ impl Adam {
     /// # Errors
     /// A rate outside `[0, 1)`.
     pub fn betas(mut self, beta1: f64, beta2: f64) -> Result<Self, Error> {
-        for (name, beta) in [("beta1", beta1), ("beta2", beta2)] {
-            if !(0.0..1.0).contains(&beta) {
-                return Err(Error::InvalidParameter {
-                    name,
-                    value: beta,
-                    reason: "must be in [0, 1)",
-                });
-            }
-        }
+        check::unit_interval("beta1", beta1)?;
+        check::unit_interval("beta2", beta2)?;
         self.beta1 = beta1;
         self.beta2 = beta2;
         Ok(self)
@@ -69,7 +63,7 @@ impl Adam {
     /// # Errors
     /// `epsilon` not finite and positive.
     pub fn epsilon(mut self, epsilon: f64) -> Result<Self, Error> {
-        check_positive("epsilon", epsilon)?;
+        check::positive("epsilon", epsilon)?;
         self.epsilon = epsilon;
         Ok(self)
     }
@@ -80,16 +74,7 @@ impl Adam {
     /// # Errors
     /// Lengths that differ, a NaN bound, or `lower[i] > upper[i]`.
     pub fn bounds(mut self, lower: Vec<f64>, upper: Vec<f64>) -> Result<Self, Error> {
-        check_len("upper bounds", upper.len(), lower.len())?;
-        for (index, (&lo, &hi)) in lower.iter().zip(&upper).enumerate() {
-            if lo.is_nan() || hi.is_nan() || lo > hi {
-                return Err(Error::InvalidBounds {
-                    index,
-                    lower: lo,
-                    upper: hi,
-                });
-            }
-        }
+        check::bounds(&lower, &upper)?;
         self.bounds = Some((lower, upper));
         Ok(self)
     }
@@ -120,21 +105,16 @@ impl Adam {
     /// and the optimiser's state are unchanged.
     pub fn step(&mut self, theta: &mut [f64], gradient: &[f64]) -> Result<(), Error> {
         let n = theta.len();
-        check_len("gradient", gradient.len(), n)?;
+        check::len("gradient", gradient.len(), n)?;
         if let Some((lower, _)) = &self.bounds {
-            check_len("bounds", lower.len(), n)?;
+            check::len("bounds", lower.len(), n)?;
         }
-        if let Some(index) = gradient.iter().position(|g| !g.is_finite()) {
-            return Err(Error::NonFiniteGradient {
-                index,
-                value: gradient[index],
-            });
-        }
+        check::gradient(gradient)?;
         if self.t == 0 {
             self.m = vec![0.0; n];
             self.v = vec![0.0; n];
         } else {
-            check_len("theta (since the first step)", n, self.m.len())?;
+            check::len("theta (since the first step)", n, self.m.len())?;
         }
         self.t = self.t.saturating_add(1);
         let correct1 = 1.0 - self.beta1.powi(self.t);

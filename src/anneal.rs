@@ -1,11 +1,35 @@
 //! `Annealer`: the spread sigma as a function of the iteration.
 
 use std::f64::consts::PI;
+use std::fmt;
+use std::str::FromStr;
 
-use crate::error::{check_positive, Error};
+use crate::check;
+use crate::error::Error;
 
 /// The shape of a schedule.
+///
+/// Its name, as a command line or a CSV file spells it, is one of `constant`,
+/// `warm-linear:<warmup>` (the warm-up fraction written out, `warm-linear:0.5` for the
+/// paper's), `exponential`, `cosine`: [`Display`](fmt::Display) writes it, [`FromStr`] reads
+/// it (ignoring ASCII case), and with the `serde` feature the variants serialise under the
+/// same kebab-case names.
+///
+/// ```
+/// use plateau::Schedule;
+/// let paper = Schedule::WarmLinear { warmup: 0.5 };
+/// assert_eq!(paper.to_string(), "warm-linear:0.5");
+/// assert_eq!("warm-linear:0.5".parse::<Schedule>()?, paper);
+/// assert_eq!("Cosine".parse::<Schedule>()?, Schedule::Cosine);
+/// assert!("warm-linear:1.5".parse::<Schedule>().is_err());
+/// # Ok::<(), plateau::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "kebab-case")
+)]
 pub enum Schedule {
     /// Sigma stays at `sigma0`.
     Constant,
@@ -19,6 +43,68 @@ pub enum Schedule {
     Exponential,
     /// Half a cosine from `sigma0` down to `sigma_min` over the run.
     Cosine,
+}
+
+impl Schedule {
+    /// Checks the schedule's own parameter (the warm-up fraction must lie in `[0, 1)`).
+    ///
+    /// ```
+    /// use plateau::Schedule;
+    /// assert!(Schedule::WarmLinear { warmup: 1.0 }.validate().is_err());
+    /// assert!(Schedule::Cosine.validate().is_ok());
+    /// ```
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `warmup` and its value.
+    pub fn validate(&self) -> Result<(), Error> {
+        match *self {
+            Schedule::WarmLinear { warmup } => check::unit_interval("warmup", warmup),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl fmt::Display for Schedule {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Schedule::Constant => f.write_str("constant"),
+            // `{}` of an f64 is the shortest text that reads back to the same bits.
+            Schedule::WarmLinear { warmup } => write!(f, "warm-linear:{warmup}"),
+            Schedule::Exponential => f.write_str("exponential"),
+            Schedule::Cosine => f.write_str("cosine"),
+        }
+    }
+}
+
+impl FromStr for Schedule {
+    type Err = Error;
+
+    /// Reads the spellings that [`Display`](fmt::Display) writes, ignoring ASCII case.
+    ///
+    /// # Errors
+    /// [`Error::UnknownName`] for an unknown name or a warm-up that is not a number;
+    /// [`Error::InvalidParameter`] for a warm-up outside `[0, 1)`.
+    fn from_str(text: &str) -> Result<Self, Error> {
+        let unknown = || Error::UnknownName {
+            what: "schedule",
+            value: text.to_owned(),
+            allowed: "constant, warm-linear:<fraction in [0, 1)>, exponential, cosine",
+        };
+        let lower = text.trim().to_ascii_lowercase();
+        let schedule = match lower.as_str() {
+            "constant" => Schedule::Constant,
+            "exponential" => Schedule::Exponential,
+            "cosine" => Schedule::Cosine,
+            other => {
+                let warmup = other.strip_prefix("warm-linear:").ok_or_else(unknown)?;
+                Schedule::WarmLinear {
+                    warmup: warmup.parse().map_err(|_| unknown())?,
+                }
+            }
+        };
+        schedule.validate()?;
+        Ok(schedule)
+    }
 }
 
 /// The spread of the smoothing kernel for each iteration of a run of `iterations`
@@ -60,24 +146,10 @@ impl Annealer {
         sigma_min: f64,
         iterations: usize,
     ) -> Result<Self, Error> {
-        check_positive("sigma0", sigma0)?;
-        check_positive("sigma_min", sigma_min)?;
-        if iterations == 0 {
-            return Err(Error::InvalidParameter {
-                name: "iterations",
-                value: 0.0,
-                reason: "must be at least 1",
-            });
-        }
-        if let Schedule::WarmLinear { warmup } = schedule {
-            if !(0.0..1.0).contains(&warmup) {
-                return Err(Error::InvalidParameter {
-                    name: "warmup",
-                    value: warmup,
-                    reason: "must be in [0, 1)",
-                });
-            }
-        }
+        check::positive("sigma0", sigma0)?;
+        check::positive("sigma_min", sigma_min)?;
+        check::at_least_one("iterations", iterations)?;
+        schedule.validate()?;
         Ok(Annealer {
             sigma0,
             sigma_min: sigma_min.min(sigma0),
@@ -213,6 +285,32 @@ mod tests {
         assert!((a.sigma(0) - 0.01).abs() < 1e-15);
         let b = Annealer::paper(0.001, 10).unwrap();
         assert_eq!(b.sigma(9), 0.001);
+    }
+
+    #[test]
+    fn schedule_names_round_trip_and_bad_names_are_errors() {
+        for schedule in [
+            Schedule::Constant,
+            Schedule::WarmLinear { warmup: 0.5 },
+            Schedule::WarmLinear { warmup: 0.3 },
+            Schedule::WarmLinear { warmup: 0.0 },
+            Schedule::Exponential,
+            Schedule::Cosine,
+        ] {
+            assert_eq!(schedule.to_string().parse::<Schedule>(), Ok(schedule));
+        }
+        for bad in ["linear", "warm-linear", "warm-linear:x", ""] {
+            match bad.parse::<Schedule>() {
+                Err(Error::UnknownName { what, value, .. }) => {
+                    assert_eq!((what, value.as_str()), ("schedule", bad));
+                }
+                other => panic!("{bad}: {other:?}"),
+            }
+        }
+        assert!(matches!(
+            "warm-linear:1".parse::<Schedule>(),
+            Err(Error::InvalidParameter { name: "warmup", value, .. }) if value == 1.0
+        ));
     }
 
     #[test]

@@ -2,12 +2,15 @@
 //! small-step central finite difference (what a gradient sees without smoothing: zero on a
 //! plateau) and SPSA (Spall, 1992).
 
-use rand::{RngExt, SeedableRng};
-use rand_xoshiro::Xoshiro256PlusPlus;
+use std::fmt;
 
-use crate::error::{check_positive, check_sigma, check_theta, Error};
-use crate::estimator::{stream_seed, Estimate, GradientEstimator};
+use rand::RngExt;
+
+use crate::check;
+use crate::error::Error;
+use crate::estimator::{Estimate, GradientEstimator};
 use crate::objective::Objective;
+use crate::seeding::{stream_rng, stream_seed};
 
 /// Central finite differences `(f(theta + h e_i) - f(theta - h e_i)) / 2h` with a fixed
 /// step `h`, `2n` evaluations per gradient. The spread handed in by the loop is ignored: this
@@ -36,7 +39,7 @@ impl<F: Objective> FiniteDifference<F> {
     /// # Errors
     /// `step` not finite and positive.
     pub fn new(objective: F, step: f64) -> Result<Self, Error> {
-        check_positive("step", step)?;
+        check::positive("step", step)?;
         Ok(FiniteDifference {
             objective,
             step,
@@ -47,6 +50,7 @@ impl<F: Objective> FiniteDifference<F> {
     }
 
     /// The seed handed to a seeded objective (the same for both sides of a difference).
+    #[must_use]
     pub fn seed(mut self, seed: u64) -> Self {
         self.seed = seed;
         self
@@ -55,7 +59,7 @@ impl<F: Objective> FiniteDifference<F> {
 
 impl<F: Objective> GradientEstimator for FiniteDifference<F> {
     fn estimate(&mut self, theta: &[f64], _sigma: f64) -> Result<Estimate, Error> {
-        check_theta(theta)?;
+        check::theta(theta)?;
         let n = theta.len();
         let h = self.step;
         let index = self.estimates;
@@ -76,7 +80,7 @@ impl<F: Objective> GradientEstimator for FiniteDifference<F> {
             gradient[i] = (0.5 * plus - 0.5 * minus) / h;
             mean_value += (plus + minus) / (2 * n) as f64;
         }
-        check_gradient(&gradient)?;
+        check::gradient(&gradient)?;
         Ok(Estimate {
             gradient,
             evaluations: 2 * n,
@@ -108,6 +112,7 @@ pub struct Spsa<F> {
 
 impl<F: Objective> Spsa<F> {
     /// SPSA on `objective`.
+    #[must_use]
     pub fn new(objective: F) -> Self {
         Spsa {
             objective,
@@ -118,6 +123,7 @@ impl<F: Objective> Spsa<F> {
     }
 
     /// The seed of the directions and of the objective's seeds.
+    #[must_use]
     pub fn seed(mut self, seed: u64) -> Self {
         self.seed = seed;
         self
@@ -126,12 +132,12 @@ impl<F: Objective> Spsa<F> {
 
 impl<F: Objective> GradientEstimator for Spsa<F> {
     fn estimate(&mut self, theta: &[f64], sigma: f64) -> Result<Estimate, Error> {
-        check_sigma(sigma)?;
-        check_theta(theta)?;
+        check::sigma(sigma)?;
+        check::theta(theta)?;
         let n = theta.len();
         let index = self.estimates;
         self.estimates += 1;
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(self.seed, index, 0));
+        let mut rng = stream_rng(self.seed, index, 0);
         let delta: Vec<f64> = (0..n)
             .map(|_| if rng.random::<bool>() { 1.0 } else { -1.0 })
             .collect();
@@ -140,13 +146,7 @@ impl<F: Objective> GradientEstimator for Spsa<F> {
             .extend(theta.iter().zip(&delta).map(|(t, d)| t + sigma * d));
         self.points
             .extend(theta.iter().zip(&delta).map(|(t, d)| t - sigma * d));
-        if let Some(at) = self.points.iter().position(|x| !x.is_finite()) {
-            return Err(Error::NonFinitePoint {
-                sample: at / n,
-                index: at % n,
-                value: self.points[at],
-            });
-        }
+        check::points(&self.points, n)?;
         let seed = stream_seed(self.seed, index, 1);
         let mut values = [0.0; 2];
         for (k, v) in values.iter_mut().enumerate() {
@@ -154,7 +154,7 @@ impl<F: Objective> GradientEstimator for Spsa<F> {
         }
         let half_diff = 0.5 * values[0] - 0.5 * values[1];
         let gradient: Vec<f64> = delta.iter().map(|d| half_diff / (sigma * d)).collect();
-        check_gradient(&gradient)?;
+        check::gradient(&gradient)?;
         Ok(Estimate {
             gradient,
             evaluations: 2,
@@ -171,24 +171,36 @@ fn evaluate_finite<F: Objective>(
     sample: usize,
 ) -> Result<f64, Error> {
     let value = f.evaluate(point, seed);
-    if value.is_finite() {
-        Ok(value)
-    } else {
-        Err(Error::NonFiniteValue {
+    check::values(&[value], point, point.len()).map_err(|e| match e {
+        Error::NonFiniteValue { value, point, .. } => Error::NonFiniteValue {
             sample,
             value,
-            point: point.to_vec(),
-        })
+            point,
+        },
+        other => other,
+    })?;
+    Ok(value)
+}
+
+impl<F> fmt::Debug for FiniteDifference<F> {
+    /// The configuration; the objective by its type's name (closures have no `Debug`).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("FiniteDifference")
+            .field("objective", &std::any::type_name::<F>())
+            .field("step", &self.step)
+            .field("seed", &self.seed)
+            .field("estimates", &self.estimates)
+            .finish_non_exhaustive()
     }
 }
 
-/// An overflowed gradient is an error, never an infinity handed to the optimiser.
-fn check_gradient(gradient: &[f64]) -> Result<(), Error> {
-    match gradient.iter().position(|g| !g.is_finite()) {
-        Some(index) => Err(Error::NonFiniteGradient {
-            index,
-            value: gradient[index],
-        }),
-        None => Ok(()),
+impl<F> fmt::Debug for Spsa<F> {
+    /// The configuration; the objective by its type's name (closures have no `Debug`).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Spsa")
+            .field("objective", &std::any::type_name::<F>())
+            .field("seed", &self.seed)
+            .field("estimates", &self.estimates)
+            .finish_non_exhaustive()
     }
 }

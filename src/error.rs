@@ -100,6 +100,18 @@ pub enum Error {
         reason: &'static str,
     },
 
+    /// A name that [`std::str::FromStr`] does not know (a sampler, a schedule): the error
+    /// names the value and every accepted spelling.
+    #[error("unknown {what} {value:?}: expected one of {allowed}")]
+    UnknownName {
+        /// What was being parsed.
+        what: &'static str,
+        /// The text that was given.
+        value: String,
+        /// The accepted spellings, comma-separated.
+        allowed: &'static str,
+    },
+
     /// A lower bound above its upper bound.
     #[error("bounds[{index}]: lower {lower} > upper {upper} (or not a number)")]
     InvalidBounds {
@@ -129,67 +141,6 @@ impl fmt::Display for Preview<'_> {
             write!(f, ", ... ({} coordinates)", self.0.len())?;
         }
         write!(f, "]")
-    }
-}
-
-/// Checks a parameter vector: non-empty, all finite.
-pub(crate) fn check_theta(theta: &[f64]) -> Result<(), Error> {
-    if theta.is_empty() {
-        return Err(Error::EmptyTheta);
-    }
-    match theta.iter().position(|x| !x.is_finite()) {
-        Some(index) => Err(Error::NonFiniteTheta {
-            index,
-            value: theta[index],
-        }),
-        None => Ok(()),
-    }
-}
-
-/// Checks a scalar spread.
-pub(crate) fn check_sigma(sigma: f64) -> Result<(), Error> {
-    if sigma.is_finite() && sigma > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::InvalidSigma(sigma))
-    }
-}
-
-/// Checks per-dimension spreads against theta's length.
-pub(crate) fn check_spreads(spreads: &[f64], dim: usize) -> Result<(), Error> {
-    check_len("spreads", spreads.len(), dim)?;
-    match spreads.iter().position(|s| !(s.is_finite() && *s > 0.0)) {
-        Some(index) => Err(Error::InvalidSpread {
-            index,
-            value: spreads[index],
-        }),
-        None => Ok(()),
-    }
-}
-
-/// Checks that a length matches.
-pub(crate) fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), Error> {
-    if got == expected {
-        Ok(())
-    } else {
-        Err(Error::LengthMismatch {
-            what,
-            expected,
-            got,
-        })
-    }
-}
-
-/// Checks a positive finite configuration value.
-pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<(), Error> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::InvalidParameter {
-            name,
-            value,
-            reason: "must be finite and > 0",
-        })
     }
 }
 

@@ -1,16 +1,19 @@
 //! `PlateauFreeGradient`: the Monte Carlo estimate of the Gaussian-smoothed gradient.
 
-use rand::SeedableRng;
-use rand_xoshiro::Xoshiro256PlusPlus;
+use std::fmt;
+
 use rayon::prelude::*;
 
-use crate::error::{check_sigma, check_spreads, check_theta, Error};
+use crate::check;
+use crate::error::Error;
 use crate::kernel::chi_mean;
 use crate::objective::{Objective, Points};
-use crate::sampling::Sampling;
+use crate::sampling::{fill_normal_local, Sampling, Scales};
+use crate::seeding::{stream_rng, stream_seed, OBJECTIVE_STREAM, ORTHOGONAL_STREAM};
 
 /// One gradient estimate.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Estimate {
     /// The estimated gradient of the smoothed objective, one entry per coordinate of theta.
     pub gradient: Vec<f64>,
@@ -35,7 +38,8 @@ type Evaluator<F> = fn(&F, Points<'_>, &[u64], &mut [f64]);
 /// Gaussian of spread `sigma` in parameter space, estimated from `samples` evaluations of `f`.
 ///
 /// Builder-style configuration; defaults: [`Sampling::Radial`], antithetic pairs, 2 samples,
-/// seed 0, sequential evaluation.
+/// seed 0, sequential evaluation. [`PlateauFreeGradient::validate`] reports a bad
+/// configuration as soon as it is made; every estimate checks it too.
 ///
 /// ```
 /// use plateau::{PlateauFreeGradient, Sampling};
@@ -43,6 +47,7 @@ type Evaluator<F> = fn(&F, Points<'_>, &[u64], &mut [f64]);
 /// // A tilted step: zero gradient almost everywhere, yet the smoothed gradient points uphill.
 /// let f = |x: &[f64]| if x[0] + 2.0 * x[1] > 0.3 { 1.0 } else { 0.0 };
 /// let mut grad = PlateauFreeGradient::new(f).samples(8).sampling(Sampling::Radial).seed(7);
+/// grad.validate()?;
 /// let est = grad.estimate(&[0.1, -0.2], 0.5)?;
 /// assert_eq!(est.gradient.len(), 2);
 /// assert_eq!(est.evaluations, 8);
@@ -52,9 +57,9 @@ type Evaluator<F> = fn(&F, Points<'_>, &[u64], &mut [f64]);
 /// # Randomness and determinism
 /// Estimate `e` (counted from 0 since construction or [`PlateauFreeGradient::reset`]) draws
 /// its `k`-th perturbation from a generator seeded by `(seed, e, k)`, and hands the
-/// objective the seed `(seed, e, k)` for both members of pair `k`. The result is a function of
-/// the seed, the inputs and the estimate's index alone: bit-for-bit the same sequentially, in
-/// parallel, and with any number of threads.
+/// objective the seed `(seed, e, k)` for both members of pair `k` (see [`crate::seeding`]).
+/// The result is a function of the seed, the inputs and the estimate's index alone:
+/// bit-for-bit the same sequentially, in parallel, and with any number of threads.
 ///
 /// # When `f` panics
 /// The panic is not caught: it unwinds out of [`PlateauFreeGradient::estimate`] (through
@@ -63,22 +68,66 @@ type Evaluator<F> = fn(&F, Points<'_>, &[u64], &mut [f64]);
 /// counted, so later estimates draw fresh perturbations.
 pub struct PlateauFreeGradient<F> {
     objective: F,
-    samples: usize,
-    sampling: Sampling,
-    antithetic: bool,
-    orthogonal: bool,
-    seed: u64,
+    settings: Settings,
     estimates: u64,
     evaluator: Evaluator<F>,
     buffers: Buffers,
 }
 
-/// Scratch space reused across estimates so that the hot path does not allocate.
+/// The configuration that the builder methods set.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Settings {
+    samples: usize,
+    sampling: Sampling,
+    antithetic: bool,
+    orthogonal: bool,
+    seed: u64,
+    parallel: bool,
+}
+
+impl Settings {
+    /// Every rule a configuration must satisfy, whatever theta and sigma will be.
+    fn validate(&self) -> Result<(), Error> {
+        if self.samples == 0 {
+            return Err(Error::ZeroSamples);
+        }
+        if self.antithetic && self.samples % 2 == 1 {
+            return Err(Error::OddSamples(self.samples));
+        }
+        if self.orthogonal && self.sampling == Sampling::PerCoordinate {
+            return Err(Error::OrthogonalUnsupported(self.sampling));
+        }
+        Ok(())
+    }
+
+    /// Evaluations of `f` per draw: 2 with antithetic pairs, else 1.
+    fn per_draw(&self) -> usize {
+        if self.antithetic {
+            2
+        } else {
+            1
+        }
+    }
+
+    /// Perturbations drawn per estimate.
+    fn draws(&self) -> usize {
+        self.samples / self.per_draw()
+    }
+}
+
+/// Scratch space reused across estimates so that the hot path does not allocate (except the
+/// gradient it returns).
 #[derive(Default)]
 struct Buffers {
-    spreads: Vec<f64>,
-    offsets: Vec<f64>,
+    /// Draws 1, 2, ... in compact form, rows of length `n` (see `Sampling::draw_raw`); draw
+    /// 0 is held by the gradient's vector until the gradient overwrites it.
+    raw: Vec<f64>,
+    /// Every draw of an orthogonal block, before it is split like the independent draws.
+    block: Vec<f64>,
+    /// Per-coordinate weights of every draw, for the samplers that write them.
     weights: Vec<f64>,
+    /// How each row of `raw` expands into an offset and a weight.
+    scales: Vec<Scales>,
     points: Vec<f64>,
     seeds: Vec<u64>,
     values: Vec<f64>,
@@ -88,17 +137,65 @@ struct Buffers {
     chi_mean: Option<(usize, f64)>,
 }
 
+impl Buffers {
+    /// Sizes every buffer for `draws` draws of dimension `n` and `evaluations` points
+    /// (a no-op once the sizes repeat).
+    fn resize(&mut self, draws: usize, evaluations: usize, n: usize) {
+        self.raw.resize((draws - 1) * n, 0.0);
+        self.weights.resize(draws * n, 0.0);
+        self.scales.resize(draws, Scales::default());
+        self.points.resize(evaluations * n, 0.0);
+        self.seeds.resize(evaluations, 0);
+        self.values.resize(evaluations, 0.0);
+        self.diffs.resize(draws, 0.0);
+    }
+
+    /// `c_n`, recomputed only when the dimension changes.
+    fn chi_mean(&mut self, n: usize) -> f64 {
+        match self.chi_mean {
+            Some((dim, c)) if dim == n => c,
+            _ => {
+                let c = chi_mean(n);
+                self.chi_mean = Some((n, c));
+                c
+            }
+        }
+    }
+}
+
+impl<F> fmt::Debug for PlateauFreeGradient<F> {
+    /// The configuration and the count of estimates; the objective by its type's name
+    /// (closures have no `Debug`).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = &self.settings;
+        f.debug_struct("PlateauFreeGradient")
+            .field("objective", &std::any::type_name::<F>())
+            .field("samples", &s.samples)
+            .field("sampling", &s.sampling)
+            .field("antithetic", &s.antithetic)
+            .field("orthogonal", &s.orthogonal)
+            .field("seed", &s.seed)
+            .field("parallel", &s.parallel)
+            .field("estimates", &self.estimates)
+            .finish_non_exhaustive()
+    }
+}
+
 impl<F: Objective> PlateauFreeGradient<F> {
     /// The estimator for `objective`: any `Fn(&[f64]) -> f64`, a [`crate::Seeded`] or
     /// [`crate::Batch`] closure, or your own [`Objective`].
+    #[must_use]
     pub fn new(objective: F) -> Self {
         PlateauFreeGradient {
             objective,
-            samples: 2,
-            sampling: Sampling::Radial,
-            antithetic: true,
-            orthogonal: false,
-            seed: 0,
+            settings: Settings {
+                samples: 2,
+                sampling: Sampling::Radial,
+                antithetic: true,
+                orthogonal: false,
+                seed: 0,
+                parallel: false,
+            },
             estimates: 0,
             evaluator: evaluate_sequential::<F>,
             buffers: Buffers::default(),
@@ -107,21 +204,24 @@ impl<F: Objective> PlateauFreeGradient<F> {
 
     /// `N`, the number of evaluations of `f` per estimate (the paper's "number of
     /// samples"). With antithetic pairs it must be even: `N / 2` pairs.
+    #[must_use]
     pub fn samples(mut self, samples: usize) -> Self {
-        self.samples = samples;
+        self.settings.samples = samples;
         self
     }
 
     /// The sampler of perturbations.
+    #[must_use]
     pub fn sampling(mut self, sampling: Sampling) -> Self {
-        self.sampling = sampling;
+        self.settings.sampling = sampling;
         self
     }
 
     /// Whether every perturbation `tau` is paired with `-tau` (default: yes). The pair's
     /// difference cancels the even part of `f`, including its constant offset.
+    #[must_use]
     pub fn antithetic(mut self, antithetic: bool) -> Self {
-        self.antithetic = antithetic;
+        self.settings.antithetic = antithetic;
         self
     }
 
@@ -129,16 +229,37 @@ impl<F: Objective> PlateauFreeGradient<F> {
     /// [`Sampling::Radial`] and [`Sampling::Gaussian`]; in blocks of `n` when there are more
     /// draws than dimensions). Still unbiased; lower variance when several draws share an
     /// estimate (see `docs/estimators.md`). Default: off.
+    #[must_use]
     pub fn orthogonal(mut self, orthogonal: bool) -> Self {
-        self.orthogonal = orthogonal;
+        self.settings.orthogonal = orthogonal;
         self
     }
 
     /// The seed of every random choice the estimator makes, and of the seeds it hands to
     /// the objective.
+    #[must_use]
     pub fn seed(mut self, seed: u64) -> Self {
-        self.seed = seed;
+        self.settings.seed = seed;
         self
+    }
+
+    /// Checks the configuration: the rules that do not depend on theta or sigma. Call it
+    /// right after building to report a bad configuration where it is made; every estimate
+    /// checks the same rules first.
+    ///
+    /// ```
+    /// use plateau::{Error, PlateauFreeGradient};
+    /// let f = |x: &[f64]| x[0];
+    /// assert_eq!(PlateauFreeGradient::new(f).samples(3).validate(), Err(Error::OddSamples(3)));
+    /// assert!(PlateauFreeGradient::new(f).samples(3).antithetic(false).validate().is_ok());
+    /// ```
+    ///
+    /// # Errors
+    /// Zero samples ([`Error::ZeroSamples`]); an odd sample count with antithetic pairs
+    /// ([`Error::OddSamples`]); orthogonal directions with the per-coordinate sampler
+    /// ([`Error::OrthogonalUnsupported`]).
+    pub fn validate(&self) -> Result<(), Error> {
+        self.settings.validate()
     }
 
     /// Restarts the count of estimates: the next estimate repeats the first one's draws.
@@ -159,19 +280,13 @@ impl<F: Objective> PlateauFreeGradient<F> {
     /// Estimates the gradient of `f` smoothed by `N(0, sigma^2 I)` at `theta`.
     ///
     /// # Errors
-    /// Empty or non-finite `theta`; `sigma` not finite and positive; zero samples; an odd
-    /// sample count with antithetic pairs; orthogonal directions with the per-coordinate
-    /// sampler; a perturbed point that overflows; `f` returning NaN or an infinity (the
-    /// error names the evaluation and the point); a gradient too large to represent.
+    /// Empty or non-finite `theta`; `sigma` not finite and positive; a configuration that
+    /// [`PlateauFreeGradient::validate`] rejects; a perturbed point that overflows; `f`
+    /// returning NaN or an infinity (the error names the evaluation and the point); a
+    /// gradient too large to represent.
     pub fn estimate(&mut self, theta: &[f64], sigma: f64) -> Result<Estimate, Error> {
-        check_sigma(sigma)?;
-        check_theta(theta)?;
-        let mut spreads = std::mem::take(&mut self.buffers.spreads);
-        spreads.clear();
-        spreads.resize(theta.len(), sigma);
-        let result = self.estimate_checked(theta, &spreads);
-        self.buffers.spreads = spreads;
-        result
+        check::sigma(sigma)?;
+        self.estimate_checked(theta, Uniform(sigma), false)
     }
 
     /// Estimates the gradient of `f` smoothed by `N(0, diag(spreads)^2)` at `theta`: one
@@ -184,88 +299,48 @@ impl<F: Objective> PlateauFreeGradient<F> {
         theta: &[f64],
         spreads: &[f64],
     ) -> Result<Estimate, Error> {
-        check_theta(theta)?;
-        check_spreads(spreads, theta.len())?;
-        self.estimate_checked(theta, spreads)
+        check::theta(theta)?;
+        check::spreads(spreads, theta.len())?;
+        self.estimate_checked(theta, spreads, true)
     }
 
-    fn estimate_checked(&mut self, theta: &[f64], spreads: &[f64]) -> Result<Estimate, Error> {
+    /// The estimate proper, for valid spreads. Theta's finiteness is checked here unless
+    /// `theta_checked`: a non-finite coordinate makes its perturbed points non-finite, so the
+    /// check rides on the points' check instead of costing a pass of its own.
+    fn estimate_checked<S: Spreads>(
+        &mut self,
+        theta: &[f64],
+        spreads: S,
+        theta_checked: bool,
+    ) -> Result<Estimate, Error> {
+        if theta.is_empty() {
+            return Err(Error::EmptyTheta);
+        }
+        let settings = self.settings;
+        settings.validate()?;
         let n = theta.len();
-        let evaluations = self.samples;
-        if evaluations == 0 {
-            return Err(Error::ZeroSamples);
-        }
-        if self.antithetic && evaluations % 2 == 1 {
-            return Err(Error::OddSamples(evaluations));
-        }
-        if self.orthogonal && self.sampling == Sampling::PerCoordinate {
-            return Err(Error::OrthogonalUnsupported(self.sampling));
-        }
-        let draws = if self.antithetic {
-            evaluations / 2
-        } else {
-            evaluations
-        };
         let index = self.estimates;
-        self.estimates += 1;
-
         let b = &mut self.buffers;
-        b.offsets.resize(draws * n, 0.0);
-        b.weights.resize(draws * n, 0.0);
-        b.points.resize(evaluations * n, 0.0);
-        b.seeds.resize(evaluations, 0);
-        b.values.resize(evaluations, 0.0);
-        b.diffs.resize(draws, 0.0);
-
-        let c_n = match b.chi_mean {
-            Some((dim, c)) if dim == n => c,
-            _ => {
-                let c = chi_mean(n);
-                b.chi_mean = Some((n, c));
-                c
-            }
-        };
-        draw_all(
-            self.sampling,
-            self.orthogonal,
-            self.seed,
+        b.resize(settings.draws(), settings.samples, n);
+        let c_n = b.chi_mean(n);
+        let stream = Stream {
+            seed: settings.seed,
             index,
-            c_n,
-            n,
-            &mut b.offsets,
-            &mut b.weights,
-        );
-
-        // Perturbed points: pair k occupies rows 2k (theta + tau) and 2k + 1 (theta - tau).
-        let per_draw = if self.antithetic { 2 } else { 1 };
-        let mut all_finite = true;
-        for (k, z) in b.offsets.chunks_exact(n).enumerate() {
-            let rows = &mut b.points[k * per_draw * n..(k + 1) * per_draw * n];
-            let (plus, minus) = rows.split_at_mut(n);
-            for i in 0..n {
-                let tau = spreads[i] * z[i];
-                let p = theta[i] + tau;
-                plus[i] = p;
-                all_finite &= p.is_finite();
+        };
+        // The first draw lives in the memory of the gradient that will be returned: the
+        // estimate has to write that memory anyway, and one vector less is touched.
+        let first = stream.draw(&settings, c_n, n, b);
+        if let Err(point_error) = write_points(&settings, theta, spreads, &first, b) {
+            if !theta_checked {
+                // Bad input is reported as such and does not consume an estimate.
+                check::theta(theta)?;
             }
-            if self.antithetic {
-                for i in 0..n {
-                    let m = theta[i] - spreads[i] * z[i];
-                    minus[i] = m;
-                    all_finite &= m.is_finite();
-                }
-            }
-            let pair_seed = stream_seed(self.seed, index, k as u64 ^ OBJECTIVE_STREAM);
-            b.seeds[k * per_draw..(k + 1) * per_draw].fill(pair_seed);
+            self.estimates += 1;
+            return Err(point_error);
         }
-        if !all_finite {
-            let at = b.points.iter().position(|x| !x.is_finite()).unwrap_or(0);
-            return Err(Error::NonFinitePoint {
-                sample: at / n,
-                index: at % n,
-                value: b.points[at],
-            });
-        }
+        stream.objective_seeds(&settings, &mut b.seeds);
+        // Counted before `f` runs: an estimate whose `f` panics is still spent.
+        self.estimates += 1;
 
         (self.evaluator)(
             &self.objective,
@@ -273,51 +348,12 @@ impl<F: Objective> PlateauFreeGradient<F> {
             &b.seeds,
             &mut b.values,
         );
-
-        if let Some(sample) = b.values.iter().position(|v| !v.is_finite()) {
-            return Err(Error::NonFiniteValue {
-                sample,
-                value: b.values[sample],
-                point: b.points[sample * n..(sample + 1) * n].to_vec(),
-            });
-        }
-
-        // Halving before subtracting keeps f near +-f64::MAX from overflowing the difference.
-        for (d, v) in b.diffs.iter_mut().zip(b.values.chunks_exact(per_draw)) {
-            *d = if self.antithetic {
-                0.5 * v[0] - 0.5 * v[1]
-            } else {
-                v[0]
-            };
-        }
-        // Accumulate in units of the largest |d| so that huge values of f overflow only if the
-        // gradient itself does.
-        let scale = b.diffs.iter().fold(0.0f64, |m, d| m.max(d.abs()));
-        let mut gradient = vec![0.0; n];
-        if scale > 0.0 {
-            for (d, w) in b.diffs.iter().zip(b.weights.chunks_exact(n)) {
-                let d = d / scale;
-                gradient.iter_mut().zip(w).for_each(|(g, wi)| *g += d * wi);
-            }
-            let common = scale / draws as f64;
-            // Branch-free so that it vectorises; the rare overflow is located afterwards.
-            let mut all_finite = true;
-            for (g, s) in gradient.iter_mut().zip(spreads) {
-                *g = *g / s * common;
-                all_finite &= g.is_finite();
-            }
-            if !all_finite {
-                let index = gradient.iter().position(|g| !g.is_finite()).unwrap_or(0);
-                return Err(Error::NonFiniteGradient {
-                    index,
-                    value: gradient[index],
-                });
-            }
-        }
-        let mean_value = b.values.iter().map(|v| v / evaluations as f64).sum();
+        check::values(&b.values, &b.points, n)?;
+        let gradient = accumulate(&settings, spreads, first, b)?;
+        let mean_value = b.values.iter().map(|v| v / settings.samples as f64).sum();
         Ok(Estimate {
             gradient,
-            evaluations,
+            evaluations: settings.samples,
             mean_value,
         })
     }
@@ -328,7 +364,9 @@ impl<F: Objective + Sync> PlateauFreeGradient<F> {
     /// (default: off, since a renderer usually parallelises within one evaluation already).
     /// Results are bit-for-bit those of the sequential run. A [`crate::Batch`] objective is
     /// then called once per point; leave this off for batch objectives.
+    #[must_use]
     pub fn parallel(mut self, parallel: bool) -> Self {
+        self.settings.parallel = parallel;
         self.evaluator = if parallel {
             evaluate_parallel::<F>
         } else {
@@ -359,62 +397,277 @@ fn evaluate_parallel<F: Objective + Sync>(
         .for_each(|(i, o)| *o = f.evaluate(points.get(i), seeds[i]));
 }
 
-/// Separates the objective's seeds from the sampler's streams.
-const OBJECTIVE_STREAM: u64 = 0x8000_0000_0000_0000;
-/// The stream of an estimate's orthogonal block draw.
-const ORTHOGONAL_STREAM: u64 = 0x4000_0000_0000_0000;
+/// The spreads of an estimate, one per coordinate: a slice, or one scalar for all (which
+/// saves writing and reading a vector of `n` copies).
+trait Spreads: Copy {
+    /// The same spreads, for a vector of length `n` (a slice is cut to `n`, so that the
+    /// compiler sees the length of every loop over it).
+    fn fit(self, n: usize) -> Self;
+    /// The spread of coordinate `i`.
+    fn at(self, i: usize) -> f64;
+}
+
+impl Spreads for &[f64] {
+    fn fit(self, n: usize) -> Self {
+        &self[..n]
+    }
+    fn at(self, i: usize) -> f64 {
+        self[i]
+    }
+}
+
+/// One spread for every coordinate.
+#[derive(Debug, Clone, Copy)]
+struct Uniform(f64);
+
+impl Spreads for Uniform {
+    fn fit(self, _n: usize) -> Self {
+        self
+    }
+    fn at(self, _i: usize) -> f64 {
+        self.0
+    }
+}
+
 /// Below this many coordinates in all, drawing on several threads costs more than it saves.
 const PARALLEL_DRAW_MIN: usize = 1 << 15;
 
-/// Fills `offsets` and `weights` (rows of length `n`) for estimate `index`.
-#[allow(clippy::too_many_arguments)]
-fn draw_all(
-    sampling: Sampling,
-    orthogonal: bool,
+/// One draw's compact row, stored weights and scales, as the draw loop sees them.
+type RowMut<'a> = ((&'a mut [f64], &'a mut [f64]), &'a mut Scales);
+
+/// Draws 1, 2, ... of an estimate: their compact rows, stored weights and scales.
+struct Rows<'a> {
+    raw: &'a mut [f64],
+    weights: &'a mut [f64],
+    scales: &'a mut [Scales],
+}
+
+/// The random streams of one estimate: `index` of the estimator seeded with `seed`.
+#[derive(Debug, Clone, Copy)]
+struct Stream {
     seed: u64,
     index: u64,
-    c_n: f64,
-    n: usize,
-    offsets: &mut [f64],
-    weights: &mut [f64],
-) {
-    if orthogonal {
-        let mut rng =
-            Xoshiro256PlusPlus::seed_from_u64(stream_seed(seed, index, ORTHOGONAL_STREAM));
-        sampling.draw_orthogonal(&mut rng, c_n, n, offsets, weights);
-        return;
+}
+
+impl Stream {
+    /// Makes the estimate's draws: returns draw 0, writes the others into `b.raw`, every
+    /// draw's scales into `b.scales` and stored weights into `b.weights`.
+    fn draw(&self, settings: &Settings, c_n: f64, n: usize, b: &mut Buffers) -> Vec<f64> {
+        let sampling = settings.sampling;
+        if settings.orthogonal {
+            b.block.resize(b.scales.len() * n, 0.0);
+            let mut rng = stream_rng(self.seed, self.index, ORTHOGONAL_STREAM);
+            sampling.draw_orthogonal(&mut rng, c_n, n, &mut b.block, &mut b.scales);
+            let (first, rest) = b.block.split_at(n);
+            b.raw.copy_from_slice(rest);
+            return first.to_vec();
+        }
+        let (w0, w_rest) = b.weights.split_at_mut(n);
+        let (s0, s_rest) = b.scales.split_at_mut(1);
+        let mut draw_first = || {
+            let mut rng = stream_rng(self.seed, self.index, 0);
+            let (first, scales) = sampling.draw_fresh(&mut rng, fill_normal_local, c_n, w0);
+            s0[0] = scales;
+            first
+        };
+        let rest = Rows {
+            raw: &mut b.raw,
+            weights: w_rest,
+            scales: s_rest,
+        };
+        if !rest.scales.is_empty() && (rest.raw.len() + n) >= PARALLEL_DRAW_MIN {
+            rayon::join(draw_first, || self.draw_rest(sampling, c_n, n, rest, true)).0
+        } else {
+            let first = draw_first();
+            self.draw_rest(sampling, c_n, n, rest, false);
+            first
+        }
     }
-    let draw_one = |(k, (z, w)): (usize, (&mut [f64], &mut [f64]))| {
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(seed, index, k as u64));
-        sampling.draw(&mut rng, c_n, z, w);
-    };
-    let draws = offsets.len() / n;
-    if draws > 1 && offsets.len() >= PARALLEL_DRAW_MIN {
-        offsets
-            .par_chunks_exact_mut(n)
-            .zip(weights.par_chunks_exact_mut(n))
-            .enumerate()
-            .for_each(draw_one);
+
+    /// Draws 1, 2, ..., draw `k` from its own stream `k`, so that the draws may run on any
+    /// thread in any order.
+    fn draw_rest(&self, sampling: Sampling, c_n: f64, n: usize, rows: Rows<'_>, parallel: bool) {
+        let draw_one = |(k, ((z, w), scale)): (usize, RowMut<'_>)| {
+            let mut rng = stream_rng(self.seed, self.index, k as u64 + 1);
+            *scale = sampling.draw_raw(&mut rng, fill_normal_local, c_n, z, w);
+        };
+        if parallel {
+            rows.raw
+                .par_chunks_exact_mut(n)
+                .zip(rows.weights.par_chunks_exact_mut(n))
+                .zip(rows.scales.par_iter_mut())
+                .enumerate()
+                .for_each(draw_one);
+        } else {
+            rows.raw
+                .chunks_exact_mut(n)
+                .zip(rows.weights.chunks_exact_mut(n))
+                .zip(rows.scales.iter_mut())
+                .enumerate()
+                .for_each(draw_one);
+        }
+    }
+
+    /// The objective's seeds: one per pair (or per draw), shared by both members of a pair.
+    fn objective_seeds(&self, settings: &Settings, seeds: &mut [u64]) {
+        for (k, pair) in seeds.chunks_exact_mut(settings.per_draw()).enumerate() {
+            pair.fill(stream_seed(
+                self.seed,
+                self.index,
+                k as u64 ^ OBJECTIVE_STREAM,
+            ));
+        }
+    }
+}
+
+/// Writes the perturbed points, `theta + spreads * z_k` (and `theta - spreads * z_k` in the
+/// next row with antithetic pairs), in one pass per draw that expands the compact draw on
+/// the fly.
+///
+/// # Errors
+/// The first non-finite point, if any.
+fn write_points<S: Spreads>(
+    settings: &Settings,
+    theta: &[f64],
+    spreads: S,
+    first: &[f64],
+    b: &mut Buffers,
+) -> Result<(), Error> {
+    let n = theta.len();
+    let spreads = spreads.fit(n);
+    let mut all_finite = true;
+    let rows = b.points.chunks_exact_mut(settings.per_draw() * n);
+    // Indexed loops over slices of a known length `n`: the bounds checks drop out and the
+    // loops vectorise (zipping with a repeated scalar spread did not).
+    let draws = std::iter::once(first).chain(b.raw.chunks_exact(n));
+    for ((raw, scale), rows) in draws.zip(&b.scales).zip(rows) {
+        let raw = &raw[..n];
+        let zs = scale.offset;
+        let (plus, minus) = rows.split_at_mut(n);
+        if settings.antithetic {
+            let minus = &mut minus[..n];
+            for i in 0..n {
+                let tau = spreads.at(i) * (zs * raw[i]);
+                let (p, m) = (theta[i] + tau, theta[i] - tau);
+                plus[i] = p;
+                minus[i] = m;
+                // `&` rather than `&&`: branch-free, so that the pass vectorises. `p - m`
+                // is not finite if either point is not: one test for the two.
+                all_finite &= (p - m).is_finite();
+            }
+        } else {
+            for i in 0..n {
+                let p = theta[i] + spreads.at(i) * (zs * raw[i]);
+                plus[i] = p;
+                all_finite &= p.is_finite();
+            }
+        }
+    }
+    if all_finite {
+        Ok(())
     } else {
-        offsets
-            .chunks_exact_mut(n)
-            .zip(weights.chunks_exact_mut(n))
-            .enumerate()
-            .for_each(draw_one);
+        check::points(&b.points, n)
     }
 }
 
-/// A well-mixed 64-bit seed for `(seed, estimate, stream)` (SplitMix64's finaliser applied
-/// to each part in turn), so that neighbouring indices give unrelated streams.
-pub(crate) fn stream_seed(seed: u64, estimate: u64, stream: u64) -> u64 {
-    let mut h = mix(seed ^ 0x243F_6A88_85A3_08D3);
-    h = mix(h ^ estimate);
-    mix(h ^ stream)
+/// The gradient `g_i = 1/P sum_k d_k w_ki / spreads_i` from the evaluated values, with
+/// `d_k` the pair's half difference (or the value without pairs), written over `first`
+/// (which holds draw 0).
+///
+/// # Errors
+/// [`Error::NonFiniteGradient`] if the gradient overflows.
+fn accumulate<S: Spreads>(
+    settings: &Settings,
+    spreads: S,
+    mut gradient: Vec<f64>,
+    b: &mut Buffers,
+) -> Result<Vec<f64>, Error> {
+    let n = gradient.len();
+    let draws = b.scales.len();
+    // Halving before subtracting keeps f near +-f64::MAX from overflowing the difference.
+    for (d, v) in b
+        .diffs
+        .iter_mut()
+        .zip(b.values.chunks_exact(settings.per_draw()))
+    {
+        *d = if settings.antithetic {
+            0.5 * v[0] - 0.5 * v[1]
+        } else {
+            v[0]
+        };
+    }
+    // Accumulate in units of the largest |d| so that huge values of f overflow only if the
+    // gradient itself does.
+    let scale = b.diffs.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+    if scale == 0.0 {
+        gradient.fill(0.0);
+        return Ok(gradient);
+    }
+    let common = scale / draws as f64;
+    let mut finite = true;
+    for (k, (draw, d)) in b.scales.iter().zip(&b.diffs).enumerate() {
+        let step = Step {
+            d: d / scale,
+            common,
+            last: k + 1 == draws,
+        };
+        let stored = &b.weights[k * n..(k + 1) * n];
+        // Weight i of draw k, given the gradient's current g_i: the sum so far and the
+        // weight. Draw 0's raw row is g itself, and the sum starts at +0.0 (so that a
+        // product of -0.0 gives +0.0, as the accumulation always has).
+        finite = match (k, draw.weight) {
+            (0, Some(ws)) => step.apply(&mut gradient, spreads, |g, _| (0.0, ws * g)),
+            (0, None) => step.apply(&mut gradient, spreads, |_, i| (0.0, stored[i])),
+            (_, Some(ws)) => {
+                let raw = &b.raw[(k - 1) * n..k * n];
+                step.apply(&mut gradient, spreads, |g, i| (g, ws * raw[i]))
+            }
+            (_, None) => step.apply(&mut gradient, spreads, |g, i| (g, stored[i])),
+        };
+    }
+    if !finite {
+        check::gradient(&gradient)?;
+    }
+    Ok(gradient)
 }
 
-fn mix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+/// One draw's contribution to the gradient, `g += d w`, finishing with
+/// `g / spreads * common` at the last draw, all in one pass.
+#[derive(Debug, Clone, Copy)]
+struct Step {
+    d: f64,
+    common: f64,
+    last: bool,
+}
+
+impl Step {
+    /// Applies the step; `term(g_i, i)` gives the sum so far and the weight of coordinate
+    /// `i`. Returns whether every coordinate it wrote is finite (checked in the same pass,
+    /// branch-free, so that no second pass is needed).
+    fn apply<S: Spreads>(
+        self,
+        g: &mut [f64],
+        spreads: S,
+        term: impl Fn(f64, usize) -> (f64, f64),
+    ) -> bool {
+        let Step { d, common, last } = self;
+        let n = g.len();
+        let spreads = spreads.fit(n);
+        if last {
+            let mut finite = true;
+            for (i, gi) in g.iter_mut().enumerate() {
+                let (sum, w) = term(*gi, i);
+                let x = (sum + d * w) / spreads.at(i) * common;
+                *gi = x;
+                finite &= x.is_finite();
+            }
+            finite
+        } else {
+            for (i, gi) in g.iter_mut().enumerate() {
+                let (sum, w) = term(*gi, i);
+                *gi = sum + d * w;
+            }
+            true
+        }
+    }
 }

@@ -32,7 +32,15 @@
 //! - [`Optimizer`]: the loop, with an observer and a [`History`].
 //! - [`baseline`]: finite differences and SPSA, for comparison on the same loop.
 //! - [`kernel`]: the Gaussian kernel, the inverse CDF of its derivative, `c_n`.
-//! - [`Error`]: every way an input can be wrong. Nothing here panics on bad input.
+//! - [`seeding`]: how every random stream is seeded (SplitMix64 of the seed, the estimate's
+//!   index and the stream), for objectives that derive seeds of their own.
+//! - [`Error`]: every way an input can be wrong. Nothing here panics on bad input; a bad
+//!   configuration is reported by [`PlateauFreeGradient::validate`] where it is made.
+//!
+//! [`Sampling`] and [`Schedule`] print and parse under one spelling each (`radial`,
+//! `per-coordinate`, `gaussian`; `constant`, `warm-linear:0.5`, `exponential`, `cosine`).
+//! The optional feature `serde` derives `Serialize` and `Deserialize` for them (under the
+//! same names) and for [`Estimate`] and [`History`].
 //!
 //! ## Example
 //! A tilted step `1[x + 2y > 0.3]` started on its flat side, where every plain gradient is
@@ -50,17 +58,19 @@
 //! # Ok::<(), plateau::Error>(())
 //! ```
 
-#![warn(missing_docs)]
+#![warn(missing_docs, missing_debug_implementations)]
 
 mod adam;
 mod anneal;
 pub mod baseline;
+mod check;
 mod error;
 mod estimator;
 pub mod kernel;
 mod objective;
 mod optimize;
 mod sampling;
+pub mod seeding;
 
 pub use adam::Adam;
 pub use anneal::{Annealer, Schedule, PAPER_SIGMA_MIN, PAPER_WARMUP};

@@ -6,6 +6,8 @@
 //! (a renderer, a simulator) and override [`Objective::evaluate_batch`] when it can do better
 //! than one point at a time.
 
+use std::fmt;
+
 /// A read-only view of `len` points of dimension `dim`, stored row after row.
 #[derive(Debug, Clone, Copy)]
 pub struct Points<'a> {
@@ -98,8 +100,17 @@ impl<F: Fn(&[f64]) -> f64> Objective for F {
 /// let noisy = Seeded(|x: &[f64], seed: u64| x[0] + (seed % 7) as f64);
 /// assert_eq!(noisy.evaluate(&[1.0], 9), 3.0);
 /// ```
-#[derive(Debug, Clone, Copy)]
+#[derive(Clone, Copy)]
 pub struct Seeded<F>(pub F);
+
+impl<F> fmt::Debug for Seeded<F> {
+    /// The closure by its type's name (closures have no `Debug`).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_tuple("Seeded")
+            .field(&std::any::type_name::<F>())
+            .finish()
+    }
+}
 
 impl<F: Fn(&[f64], u64) -> f64> Objective for Seeded<F> {
     fn evaluate(&self, point: &[f64], seed: u64) -> f64 {
@@ -120,8 +131,17 @@ impl<F: Fn(&[f64], u64) -> f64> Objective for Seeded<F> {
 /// });
 /// assert_eq!(sum_of_squares.evaluate(&[3.0, 4.0], 0), 25.0);
 /// ```
-#[derive(Debug, Clone, Copy)]
+#[derive(Clone, Copy)]
 pub struct Batch<F>(pub F);
+
+impl<F> fmt::Debug for Batch<F> {
+    /// The closure by its type's name (closures have no `Debug`).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_tuple("Batch")
+            .field(&std::any::type_name::<F>())
+            .finish()
+    }
+}
 
 impl<F: Fn(Points<'_>, &[u64], &mut [f64])> Objective for Batch<F> {
     fn evaluate(&self, point: &[f64], seed: u64) -> f64 {

@@ -4,7 +4,8 @@ use std::ops::ControlFlow;
 
 use crate::adam::Adam;
 use crate::anneal::Annealer;
-use crate::error::{check_theta, Error};
+use crate::check;
+use crate::error::Error;
 use crate::estimator::{Estimate, GradientEstimator};
 
 /// What the observer sees after each iteration.
@@ -22,6 +23,7 @@ pub struct Step<'a> {
 
 /// The record of a run: one entry per completed iteration.
 #[derive(Debug, Clone, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct History {
     /// Parameters after each iteration (only after the last one when
     /// [`Optimizer::record_theta`] is off).
@@ -71,6 +73,7 @@ pub struct Optimizer {
 
 impl Optimizer {
     /// A loop of `annealer.iterations()` iterations.
+    #[must_use]
     pub fn new(adam: Adam, annealer: Annealer) -> Self {
         Optimizer {
             iterations: annealer.iterations(),
@@ -82,6 +85,7 @@ impl Optimizer {
 
     /// Runs a different number of iterations than the annealer spans (past its end, sigma
     /// stays at its final value).
+    #[must_use]
     pub fn iterations(mut self, iterations: usize) -> Self {
         self.iterations = iterations;
         self
@@ -89,6 +93,7 @@ impl Optimizer {
 
     /// Whether the history keeps theta for every iteration (default: yes). Turn it off for
     /// very long parameter vectors; the last theta is always kept.
+    #[must_use]
     pub fn record_theta(mut self, record: bool) -> Self {
         self.record_theta = record;
         self
@@ -132,7 +137,7 @@ impl Optimizer {
         G: GradientEstimator + ?Sized,
         O: FnMut(&Step<'_>) -> ControlFlow<()>,
     {
-        check_theta(start)?;
+        check::theta(start)?;
         self.adam.reset();
         let mut theta = start.to_vec();
         let mut history = History::default();

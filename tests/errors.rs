@@ -374,11 +374,7 @@ fn invalid_configuration() {
         ("warmup", 1.0)
     );
     assert_eq!(
-        name_and_value(
-            FiniteDifference::new(linear, 0.0)
-                .err()
-                .expect("zero step rejected")
-        ),
+        name_and_value(FiniteDifference::new(linear, 0.0).expect_err("zero step rejected")),
         ("step", 0.0)
     );
     match adam

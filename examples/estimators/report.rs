@@ -1,0 +1,261 @@
+//! The page's tables: number formats, the summary of ratios, and the Cost section from the
+//! criterion benchmark's medians.
+
+use std::fmt::Write as _;
+
+use plateau::Sampling;
+
+use crate::measure::{Config, Stats};
+use crate::DIMENSIONS;
+
+pub(crate) fn fmt_num(x: f64) -> String {
+    if x == 0.0 {
+        "0".into()
+    } else if !(1e-3..1e4).contains(&x.abs()) {
+        format!("{x:.2e}")
+    } else if x.abs() >= 100.0 {
+        format!("{x:.0}")
+    } else {
+        format!("{x:.3}")
+    }
+}
+
+/// A relative size as a percentage with two significant digits (`x` above 10 as a number).
+pub(crate) fn pct(x: f64) -> String {
+    if x >= 10.0 {
+        format!("{x:.1e}")
+    } else if x >= 0.1 {
+        format!("{:.0} %", 100.0 * x)
+    } else if x >= 0.01 {
+        format!("{:.1} %", 100.0 * x)
+    } else {
+        format!("{:.2} %", 100.0 * x)
+    }
+}
+
+pub(crate) fn find(
+    configs: &[Config],
+    sampling: Sampling,
+    anti: bool,
+    orth: bool,
+    samples: usize,
+) -> usize {
+    configs
+        .iter()
+        .position(|c| {
+            c.sampling == sampling
+                && c.antithetic == anti
+                && c.orthogonal == orth
+                && c.samples == samples
+        })
+        .expect("configuration measured")
+}
+
+/// Ratios of rel. MSE / eval between two configurations, per function and dimension, with
+/// their geometric mean per dimension.
+pub(crate) fn ratio_table(
+    page: &mut String,
+    title: &str,
+    names: &[&str],
+    results: &[Vec<Vec<Stats>>],
+    (num, den): (usize, usize),
+) {
+    writeln!(page, "{title}\n").unwrap();
+    write!(page, "| function |").unwrap();
+    for n in DIMENSIONS {
+        write!(page, " n = {n} |").unwrap();
+    }
+    writeln!(page).unwrap();
+    writeln!(page, "|---|{}", "---|".repeat(DIMENSIONS.len())).unwrap();
+    let mut logs = vec![0.0; DIMENSIONS.len()];
+    for (fi, name) in names.iter().enumerate() {
+        write!(page, "| {name} |").unwrap();
+        for di in 0..DIMENSIONS.len() {
+            let r = results[fi][num][di].rmse / results[fi][den][di].rmse;
+            logs[di] += r.ln();
+            write!(page, " {r:.2} |").unwrap();
+        }
+        writeln!(page).unwrap();
+    }
+    write!(page, "| **geometric mean** |").unwrap();
+    for l in logs {
+        write!(page, " **{:.2}** |", (l / names.len() as f64).exp()).unwrap();
+    }
+    writeln!(page, "\n").unwrap();
+}
+
+pub(crate) fn summary(
+    page: &mut String,
+    configs: &[Config],
+    names: &[&str],
+    results: &[Vec<Vec<Stats>>],
+) {
+    writeln!(page, "## Summary\n").unwrap();
+    writeln!(
+        page,
+        "Ratios of rel. MSE / eval (below 1: the first configuration is better at equal \
+         cost).\n"
+    )
+    .unwrap();
+    let r = Sampling::Radial;
+    let g = Sampling::Gaussian;
+    let p = Sampling::PerCoordinate;
+    ratio_table(
+        page,
+        "**Orthogonal / independent directions**, radial, antithetic, N = 8 (4 pairs):",
+        names,
+        results,
+        (
+            find(configs, r, true, true, 8),
+            find(configs, r, true, false, 8),
+        ),
+    );
+    ratio_table(
+        page,
+        "**Orthogonal / independent directions**, Gaussian, antithetic, N = 8:",
+        names,
+        results,
+        (
+            find(configs, g, true, true, 8),
+            find(configs, g, true, false, 8),
+        ),
+    );
+    ratio_table(
+        page,
+        "**Orthogonal / independent directions**, radial, no pairs, N = 8 (8 draws):",
+        names,
+        results,
+        (
+            find(configs, r, false, true, 8),
+            find(configs, r, false, false, 8),
+        ),
+    );
+    ratio_table(
+        page,
+        "**Radial / Gaussian**, antithetic, N = 2:",
+        names,
+        results,
+        (
+            find(configs, r, true, false, 2),
+            find(configs, g, true, false, 2),
+        ),
+    );
+    ratio_table(
+        page,
+        "**Antithetic / no pairs**, radial, N = 8:",
+        names,
+        results,
+        (
+            find(configs, r, true, false, 8),
+            find(configs, r, false, false, 8),
+        ),
+    );
+    ratio_table(
+        page,
+        "**Per-coordinate / radial**, antithetic, N = 2 (MSE includes the per-coordinate bias):",
+        names,
+        results,
+        (
+            find(configs, p, true, false, 2),
+            find(configs, r, true, false, 2),
+        ),
+    );
+    // The per-coordinate bias in floors.
+    let pc = find(configs, p, true, false, 8);
+    let rad = find(configs, r, true, false, 8);
+    writeln!(
+        page,
+        "**Bias in units of its noise floor**, antithetic, N = 8: per-coordinate [its \
+         relative bias] vs radial. An unbiased estimator shows about 1, rarely above \
+         3.\n"
+    )
+    .unwrap();
+    write!(page, "| function |").unwrap();
+    for n in DIMENSIONS {
+        write!(page, " n = {n} |").unwrap();
+    }
+    writeln!(page).unwrap();
+    writeln!(page, "|---|{}", "---|".repeat(DIMENSIONS.len())).unwrap();
+    for (fi, name) in names.iter().enumerate() {
+        write!(page, "| {name} |").unwrap();
+        for (a, b) in results[fi][pc].iter().zip(&results[fi][rad]) {
+            write!(
+                page,
+                " {:.1} [{}] vs {:.1} |",
+                a.bias / a.floor,
+                pct(a.bias),
+                b.bias / b.floor
+            )
+            .unwrap();
+        }
+        writeln!(page).unwrap();
+    }
+    writeln!(page).unwrap();
+}
+
+/// The median time of one criterion benchmark, in nanoseconds, if it has run.
+pub(crate) fn bench_median(n: usize, name: &str) -> Option<f64> {
+    let path = format!("target/criterion/n={n}/{name}/{n}/new/estimates.json");
+    let text = std::fs::read_to_string(path).ok()?;
+    let json: serde_json::Value = serde_json::from_str(&text).ok()?;
+    json["median"]["point_estimate"].as_f64()
+}
+
+pub(crate) fn fmt_time(ns: f64) -> String {
+    if ns < 1e3 {
+        format!("{ns:.0} ns")
+    } else if ns < 1e6 {
+        format!("{:.1} µs", ns / 1e3)
+    } else {
+        format!("{:.2} ms", ns / 1e6)
+    }
+}
+
+pub(crate) fn cost(page: &mut String) {
+    writeln!(page, "## Cost\n").unwrap();
+    writeln!(
+        page,
+        "`cargo bench --bench estimator`: one estimate with N = 2 (one antithetic pair) of a \
+         trivial f (`x[0]`), one core, beside drawing n standard normals with `rand_distr` \
+         (`StandardNormal`, the same Xoshiro256++ generator) into a buffer. Median times; \
+         the ratio is estimate / normals.\n"
+    )
+    .unwrap();
+    let dims = [1usize, 150, 49_152, 1_000_000];
+    if bench_median(1, "normals").is_none() {
+        writeln!(
+            page,
+            "(No benchmark results in `target/criterion`: run `cargo bench --bench estimator` \
+             and then this example.)\n"
+        )
+        .unwrap();
+        return;
+    }
+    writeln!(
+        page,
+        "| n | n normals | radial | per-coordinate | Gaussian |"
+    )
+    .unwrap();
+    writeln!(page, "|---|---|---|---|---|").unwrap();
+    for n in dims {
+        let base = bench_median(n, "normals");
+        write!(page, "| {n} | {} |", base.map_or("-".into(), fmt_time)).unwrap();
+        for name in ["radial", "per_coordinate", "gaussian"] {
+            match (bench_median(n, name), base) {
+                (Some(t), Some(b)) => write!(page, " {} ({:.1}x) |", fmt_time(t), t / b).unwrap(),
+                _ => write!(page, " - |").unwrap(),
+            }
+        }
+        writeln!(page).unwrap();
+    }
+    if let Some(t) = bench_median(49_152, "radial") {
+        writeln!(
+            page,
+            "\nOne estimate at n = 49,152, N = 2 (radial): {} — {} 1 ms.",
+            fmt_time(t),
+            if t < 1e6 { "under" } else { "NOT under" }
+        )
+        .unwrap();
+    }
+    writeln!(page).unwrap();
+}
