@@ -1,12 +1,22 @@
 //! Optimise a 2-D tilted step from a start on its plateau, where every plain gradient is 0.
 //!
-//! `cargo run --release --example quickstart`
-use plateau::{Adam, Annealer, Optimizer, PlateauFreeGradient};
+//! `cargo run --release --example quickstart [radial|per-coordinate|gaussian]`
+use plateau::{Adam, Annealer, Optimizer, PlateauFreeGradient, Sampling};
 
 fn main() -> Result<(), plateau::Error> {
+    // The sampler by its name; an unknown name is an error that lists the known ones.
+    let sampling: Sampling = match std::env::args().nth(1) {
+        Some(name) => name.parse()?,
+        None => Sampling::default(),
+    };
     // A loss of 1 above the line x + 2y = 0.3 and 0 below it: flat on both sides.
     let loss = |x: &[f64]| if x[0] + 2.0 * x[1] > 0.3 { 1.0 } else { 0.0 };
-    let mut grad = PlateauFreeGradient::new(loss).samples(4).seed(1);
+    let mut grad = PlateauFreeGradient::new(loss)
+        .sampling(sampling)
+        .samples(4)
+        .seed(1);
+    // A bad configuration (say, an odd number of samples with antithetic pairs) stops here.
+    grad.validate()?;
     let mut opt = Optimizer::new(Adam::new(0.02)?, Annealer::paper(0.5, 200)?);
     let history = opt.minimize_with(&mut grad, &[1.0, 1.0], |step| {
         if step.iteration % 40 == 0 {
@@ -18,6 +28,6 @@ fn main() -> Result<(), plateau::Error> {
         std::ops::ControlFlow::Continue(())
     })?;
     let x = history.last_theta().expect("ran at least one iteration");
-    println!("final theta {x:.3?}: loss {}", loss(x));
+    println!("{sampling}: final theta {x:.3?}: loss {}", loss(x));
     Ok(())
 }

@@ -119,6 +119,7 @@ pub(crate) fn points(points: &[f64], dim: usize) -> Result<(), Error> {
 
 /// The objective's values at `points` (rows of length `dim`): all finite, else the error
 /// that names the first bad evaluation and its point.
+#[inline]
 pub(crate) fn values(values: &[f64], points: &[f64], dim: usize) -> Result<(), Error> {
     match values.iter().position(|v| !v.is_finite()) {
         Some(sample) => Err(Error::NonFiniteValue {

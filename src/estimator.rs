@@ -87,6 +87,7 @@ struct Settings {
 
 impl Settings {
     /// Every rule a configuration must satisfy, whatever theta and sigma will be.
+    #[inline]
     fn validate(&self) -> Result<(), Error> {
         if self.samples == 0 {
             return Err(Error::ZeroSamples);
@@ -101,6 +102,7 @@ impl Settings {
     }
 
     /// Evaluations of `f` per draw: 2 with antithetic pairs, else 1.
+    #[inline]
     fn per_draw(&self) -> usize {
         if self.antithetic {
             2
@@ -110,6 +112,7 @@ impl Settings {
     }
 
     /// Perturbations drawn per estimate.
+    #[inline]
     fn draws(&self) -> usize {
         self.samples / self.per_draw()
     }
@@ -140,6 +143,7 @@ struct Buffers {
 impl Buffers {
     /// Sizes every buffer for `draws` draws of dimension `n` and `evaluations` points
     /// (a no-op once the sizes repeat).
+    #[inline]
     fn resize(&mut self, draws: usize, evaluations: usize, n: usize) {
         self.raw.resize((draws - 1) * n, 0.0);
         self.weights.resize(draws * n, 0.0);
@@ -151,6 +155,7 @@ impl Buffers {
     }
 
     /// `c_n`, recomputed only when the dimension changes.
+    #[inline]
     fn chi_mean(&mut self, n: usize) -> f64 {
         match self.chi_mean {
             Some((dim, c)) if dim == n => c,
@@ -509,6 +514,7 @@ impl Stream {
     }
 
     /// The objective's seeds: one per pair (or per draw), shared by both members of a pair.
+    #[inline]
     fn objective_seeds(&self, settings: &Settings, seeds: &mut [u64]) {
         for (k, pair) in seeds.chunks_exact_mut(settings.per_draw()).enumerate() {
             pair.fill(stream_seed(

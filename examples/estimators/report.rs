@@ -217,8 +217,9 @@ pub(crate) fn cost(page: &mut String) {
         page,
         "`cargo bench --bench estimator`: one estimate with N = 2 (one antithetic pair) of a \
          trivial f (`x[0]`), one core, beside drawing n standard normals with `rand_distr` \
-         (`StandardNormal`, the same Xoshiro256++ generator) into a buffer. Median times; \
-         the ratio is estimate / normals.\n"
+         (`StandardNormal`, the same Xoshiro256++ generator, on a local copy) into a buffer. \
+         Median times of best-of-blocks samples (robust to a shared machine's load); the ratio \
+         is estimate / normals.\n"
     )
     .unwrap();
     let dims = [1usize, 150, 49_152, 1_000_000];
