@@ -11,17 +11,21 @@ use plotters::prelude::*;
 
 use crate::render::Image;
 
+/// What the path tracer's fallible functions return: any error, sendable across threads.
 pub type Result<T> = std::result::Result<T, Box<dyn Error + Send + Sync>>;
 
 /// One line of a plot.
 pub struct Series {
+    /// The legend entry.
     pub name: String,
+    /// The (x, y) points.
     pub points: Vec<(f64, f64)>,
     /// Draw markers instead of a line (for scattered measurements).
     pub markers: bool,
 }
 
 impl Series {
+    /// A line through the points.
     pub fn line(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
         Series {
             name: name.into(),
@@ -30,6 +34,7 @@ impl Series {
         }
     }
 
+    /// A marker at each point.
     pub fn markers(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
         Series {
             name: name.into(),
@@ -42,7 +47,9 @@ impl Series {
 /// Axis scales of a plot.
 #[derive(Clone, Copy, PartialEq, Eq)]
 pub enum Scale {
+    /// Evenly spaced values.
     Linear,
+    /// Evenly spaced decades.
     Log,
 }
 

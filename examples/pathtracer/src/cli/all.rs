@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{summarize, with_threads};
+use super::{summarize, values, with_threads};
 use crate::report::Result;
 use crate::run::{self, Method, Settings};
 use crate::tasks;
@@ -11,24 +11,24 @@ use crate::tasks;
 /// The options of `all`.
 #[derive(clap::Args)]
 pub(super) struct Args {
-    /// Output directory (default out/).
-    #[arg(long, default_value = "out")]
+    /// Output directory.
+    #[arg(long, default_value = "out", value_parser = values::out_dir)]
     out: PathBuf,
     /// A few minutes in all: a tenth of the iterations at half resolution.
     #[arg(long)]
     quick: bool,
-    /// Only these tasks (comma-separated).
-    #[arg(long, value_delimiter = ',')]
+    /// Only these tasks (comma-separated) [default: every task].
+    #[arg(long, value_delimiter = ',', value_parser = values::task)]
     tasks: Option<Vec<String>>,
     /// Runs of the plateau-free gradient per task (seeds 0, 1, ...): the table reports
     /// the median and the range.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = values::at_least(1u64))]
     seeds: u64,
     /// Skip the finite-difference baseline.
     #[arg(long)]
     no_baseline: bool,
-    /// Worker threads for rendering (default: all cores).
-    #[arg(long)]
+    /// Worker threads for rendering [default: all cores].
+    #[arg(long, allow_negative_numbers = true, value_parser = values::at_least(1usize))]
     threads: Option<usize>,
 }
 
@@ -39,7 +39,7 @@ pub(super) fn run(args: Args) -> Result<()> {
             &args.out,
             args.quick,
             args.tasks.as_deref(),
-            args.seeds.max(1),
+            args.seeds,
             !args.no_baseline,
         )
     })

@@ -1,30 +1,38 @@
 //! `landscape <task>`: the loss along one coordinate, raw and Gaussian-smoothed, as CSV.
 
+use super::{usage, values};
 use crate::report::Result;
 use crate::tasks::View;
 
 /// The options of `landscape`.
 #[derive(clap::Args)]
 pub(super) struct Args {
+    /// The task: cup, shadow, occlusion, gi, sort, caustic or texture.
+    #[arg(value_parser = values::task)]
     task: String,
-    /// The coordinate to vary.
-    #[arg(long, default_value_t = 0)]
+    /// The coordinate to vary (0 to the task's parameter count - 1).
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true, value_parser = values::at_least(0usize))]
     coordinate: usize,
-    #[arg(long, allow_hyphen_values = true)]
+    /// The coordinate's first value.
+    #[arg(long, allow_hyphen_values = true, value_parser = values::finite)]
     from: f64,
-    #[arg(long, allow_hyphen_values = true)]
+    /// The coordinate's last value (above --from).
+    #[arg(long, allow_hyphen_values = true, value_parser = values::finite)]
     to: f64,
-    #[arg(long, default_value_t = 101)]
+    /// Points from --from to --to, both included.
+    #[arg(long, default_value_t = 101, allow_negative_numbers = true, value_parser = values::at_least(2usize))]
     steps: usize,
     /// Vary around the start instead of the target.
     #[arg(long)]
     around_start: bool,
     /// Spreads of the smoothed curves (comma-separated).
-    #[arg(long, value_delimiter = ',', default_value = "0.1,0.25,0.5")]
+    #[arg(long, value_delimiter = ',', default_value = "0.1,0.25,0.5", allow_hyphen_values = true, value_parser = values::positive)]
     sigmas: Vec<f64>,
-    #[arg(long)]
+    /// Samples per pixel of every render [default: the task's].
+    #[arg(long, allow_negative_numbers = true, value_parser = values::at_least(1u32))]
     spp: Option<u32>,
-    #[arg(long, default_value_t = 0)]
+    /// Seed of the renderer's noise (the same for every render).
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true, value_parser = values::at_least(0u64))]
     seed: u64,
 }
 
@@ -44,8 +52,17 @@ pub(super) fn run(args: Args) -> Result<()> {
         seed,
     } = args;
     let task = super::find_task(&task)?;
-    if coordinate >= task.dim() || steps < 2 || from.is_nan() || to.is_nan() || from >= to {
-        return Err("need coordinate < dim, steps >= 2 and from < to".into());
+    if coordinate >= task.dim() {
+        return Err(usage(format!(
+            "--coordinate {coordinate}: allowed: 0 to {} ({}'s parameters)",
+            task.dim() - 1,
+            task.name()
+        )));
+    }
+    if from >= to {
+        return Err(usage(format!(
+            "--from {from} --to {to}: allowed: --from below --to"
+        )));
     }
     let spp = spp.unwrap_or(task.defaults().spp);
     let view = View::default();

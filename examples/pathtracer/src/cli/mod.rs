@@ -10,6 +10,7 @@ mod optimize;
 mod render;
 mod summarize;
 mod timings;
+mod values;
 
 use std::time::Instant;
 
@@ -55,20 +56,20 @@ enum Command {
 /// How every render of a command is made: the options `optimize` and `render` share.
 #[derive(clap::Args, Clone, Debug, Default)]
 struct RenderOptions {
-    /// Samples per pixel (default: the task's).
-    #[arg(long)]
+    /// Samples per pixel of every render [default: the task's, supplemental Table 1].
+    #[arg(long, allow_negative_numbers = true, value_parser = values::at_least(1u32))]
     spp: Option<u32>,
-    /// The renderer's seed (and the estimator's, in `optimize`).
-    #[arg(long, default_value_t = 0)]
+    /// Seed of the renderer's noise (and of the estimator's draws, in `optimize`).
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true, value_parser = values::at_least(0u64))]
     seed: u64,
-    /// Horizontal field of view in degrees (default: the task's).
-    #[arg(long)]
+    /// Horizontal field of view in degrees, replacing the task's [default: the task's].
+    #[arg(long, allow_hyphen_values = true, value_parser = values::fov)]
     fov: Option<f64>,
-    /// Resolution multiplier (0.5 renders a quarter of the pixels).
-    #[arg(long)]
+    /// Resolution multiplier: 0.5 renders a quarter of the pixels [default: 1].
+    #[arg(long, allow_hyphen_values = true, value_parser = values::positive)]
     scale: Option<f64>,
-    /// Worker threads for rendering (default: all cores).
-    #[arg(long)]
+    /// Worker threads for rendering [default: all cores].
+    #[arg(long, allow_negative_numbers = true, value_parser = values::at_least(1usize))]
     threads: Option<usize>,
 }
 
@@ -82,12 +83,59 @@ impl RenderOptions {
     }
 }
 
-/// Parses the command line and runs it; an error is printed on one line and exits 1.
+/// Parses the command line and runs it. A bad command line (a value out of range, an unknown
+/// name, a missing argument) is refused before any work, on one line, with exit code 2; a
+/// failure while working is printed on one line and exits 1.
 pub fn main() {
-    if let Err(e) = run_cli(Cli::parse()) {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        // --help and --version.
+        Err(e) if !e.use_stderr() => {
+            let _ = e.print();
+            std::process::exit(0);
+        }
+        Err(e) => {
+            eprintln!("{}", one_line(&e));
+            std::process::exit(2);
+        }
+    };
+    if let Err(e) = run_cli(cli) {
         eprintln!("error: {e}");
-        std::process::exit(1);
+        std::process::exit(if e.is::<Usage>() { 2 } else { 1 });
     }
+}
+
+/// clap's message without its blank lines, usage and tips, as one line.
+fn one_line(e: &clap::Error) -> String {
+    e.to_string()
+        .lines()
+        .map(str::trim)
+        .filter(|l| {
+            !(l.is_empty()
+                || l.starts_with("For more information")
+                || l.starts_with("Usage:")
+                || l.starts_with("tip:"))
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// A command line that parses but asks for something impossible (arguments that exclude each
+/// other, a parameter count that does not fit the task): exit code 2, like a parse error.
+#[derive(Debug)]
+struct Usage(String);
+
+impl std::fmt::Display for Usage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Usage {}
+
+/// A [`Usage`] error, boxed.
+fn usage(message: String) -> Box<dyn std::error::Error + Send + Sync> {
+    Box::new(Usage(message))
 }
 
 /// Runs one parsed command line.
@@ -106,7 +154,7 @@ fn run_cli(cli: Cli) -> Result<()> {
 /// The task called `name`, or an error listing the tasks.
 fn find_task(name: &str) -> Result<Task> {
     tasks::by_name(name).ok_or_else(|| {
-        let names: Vec<_> = tasks::all().iter().map(|t| t.name()).collect();
+        let names: Vec<_> = tasks::names().collect();
         format!("unknown task {name:?}; the tasks are {}", names.join(", ")).into()
     })
 }
@@ -150,5 +198,159 @@ mod tests {
     #[test]
     fn the_command_line_is_consistent() {
         Cli::command().debug_assert();
+    }
+
+    /// The one-line message of a refused command line (panics if it parses).
+    fn refused(line: &str) -> String {
+        match Cli::try_parse_from(line.split_whitespace()) {
+            Ok(_) => panic!("accepted: {line}"),
+            Err(e) => {
+                assert_eq!(e.exit_code(), 2, "{line}");
+                one_line(&e)
+            }
+        }
+    }
+
+    /// Asserts that `line` is refused on one line naming `argument`, `value` and `allowed`.
+    fn refused_naming(line: &str, argument: &str, value: &str, allowed: &str) {
+        let message = refused(&format!("pathtracer {line}"));
+        assert!(!message.contains('\n'), "{line}: {message}");
+        for part in [argument, &format!("'{value}'"), allowed] {
+            assert!(
+                message.contains(part),
+                "{line}: {part:?} not in {message:?}"
+            );
+        }
+    }
+
+    /// As [`refused_naming`], the argument and the value being the line's last two words.
+    fn refused_last(line: &str, allowed: &str) {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let [.., argument, value] = words[..] else {
+            panic!("{line}: too short")
+        };
+        refused_naming(line, argument, value, allowed);
+    }
+
+    /// Every bad value is refused while parsing, on one line naming the argument, the value
+    /// and what is allowed: negative numbers are read as values, then refused.
+    #[test]
+    fn bad_values_are_refused_with_the_argument_the_value_and_what_is_allowed() {
+        for option in [
+            "--iterations",
+            "--samples",
+            "--spp",
+            "--threads",
+            "--eval-every",
+        ] {
+            for value in ["0", "-5", "x"] {
+                refused_last(&format!("optimize shadow {option} {value}"), ">= 1");
+            }
+        }
+        for option in ["--sigma0", "--lr", "--scale", "--budget", "--fd-step"] {
+            for value in ["0", "-1", "NaN", "inf", "-inf"] {
+                refused_last(
+                    &format!("optimize shadow {option} {value}"),
+                    "finite number > 0",
+                );
+            }
+        }
+        for value in ["0", "180", "-10", "nan"] {
+            refused_last(&format!("render cup --out a.png --fov {value}"), "< 180");
+        }
+        for line in [
+            "render cup --out a.png --repeat 0",
+            "all --seeds 0",
+            "experiment fig1 --seeds -2",
+            "timings --repeat 0",
+        ] {
+            refused_last(line, ">= 1");
+        }
+        for (line, allowed) in [
+            ("landscape cup --from 0 --to 1 --steps 1", ">= 2"),
+            ("landscape cup --to 1 --from -inf", "finite"),
+            ("render cup --out cup.jpg", ".png or .exr"),
+            ("optimize shadow --sampling best", "radial"),
+            ("optimize shadow --method magic", "plateau"),
+        ] {
+            refused_last(line, allowed);
+        }
+        for (line, argument, value, allowed) in [
+            ("optimize nope", "<TASK>", "nope", "cup, shadow"),
+            ("experiment fig9", "<NAME>", "fig9", "fig1"),
+            ("all --tasks cup,nope", "--tasks", "nope", "cup, shadow"),
+            (
+                "render cup --params 0.1,nan --out a.png",
+                "--params",
+                "nan",
+                "finite",
+            ),
+            (
+                "landscape cup --from 0 --to 1 --sigmas 0.1,-1",
+                "--sigmas",
+                "-1",
+                "> 0",
+            ),
+        ] {
+            refused_naming(line, argument, value, allowed);
+        }
+    }
+
+    /// An existing file is no output directory.
+    #[test]
+    fn an_existing_file_is_refused_as_an_output_directory() {
+        let file = std::env::temp_dir().join(format!("plateau-cli-{}", std::process::id()));
+        std::fs::write(&file, b"x").unwrap();
+        for command in [
+            "optimize shadow --out",
+            "all --out",
+            "experiment fig1 --out",
+        ] {
+            let message = refused(&format!("pathtracer {command} {}", file.display()));
+            assert!(
+                message.contains("--out") && message.contains("not a file"),
+                "{message}"
+            );
+        }
+        std::fs::remove_file(&file).unwrap();
+    }
+
+    /// Good values, negative ones where they are allowed included, parse.
+    #[test]
+    fn good_values_parse() {
+        for line in [
+            "optimize shadow --iterations 3 --sigma0 0.5 --lr 0.01 --fov 60 --scale 0.5 --eval-every 1",
+            "render shadow --params -1.5,1.0 --out a.exr",
+            "landscape shadow --coordinate 1 --from -3 --to -1",
+            "experiment gradient-quality --quick --seeds 2",
+        ] {
+            let args = format!("pathtracer {line}");
+            assert!(Cli::try_parse_from(args.split_whitespace()).is_ok(), "{line}");
+        }
+    }
+
+    /// Every option of every command says what it does, and, where it takes a value and is
+    /// not required, its default.
+    #[test]
+    fn every_option_documents_itself_and_its_default() {
+        let cli = Cli::command();
+        for command in cli.get_subcommands() {
+            for arg in command.get_arguments() {
+                let id = arg.get_id().as_str();
+                if id == "help" {
+                    continue;
+                }
+                let help = arg.get_help().map(|h| h.to_string()).unwrap_or_default();
+                assert!(!help.is_empty(), "{} --{id}: no help", command.get_name());
+                let takes_value = arg.get_num_args().is_some_and(|n| n.takes_values());
+                if takes_value && !arg.is_required_set() && arg.get_default_values().is_empty() {
+                    assert!(
+                        help.contains("[default:"),
+                        "{} --{id}: no default in {help:?}",
+                        command.get_name()
+                    );
+                }
+            }
+        }
     }
 }

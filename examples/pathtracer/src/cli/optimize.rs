@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{find_task, with_threads, RenderOptions};
+use super::{find_task, usage, values, with_threads, RenderOptions};
 use crate::report::Result;
 use crate::run::{self, Crn, Method, SamplerArg, Settings};
 use crate::tasks::Task;
@@ -10,52 +10,61 @@ use crate::tasks::Task;
 /// The options of `optimize`.
 #[derive(clap::Args)]
 pub(super) struct Args {
-    /// cup, shadow, occlusion, gi, sort, caustic or texture.
+    /// The task: cup, shadow, occlusion, gi, sort, caustic or texture.
+    #[arg(value_parser = values::task)]
     task: String,
     #[command(flatten)]
     opts: RunOptions,
-    /// Output directory (default out/<task>).
-    #[arg(long)]
+    /// Output directory [default: out/<task>].
+    #[arg(long, value_parser = values::out_dir)]
     out: Option<PathBuf>,
 }
 
 /// Overrides of a task's defaults (supplemental Table 1).
 #[derive(clap::Args, Clone, Debug, Default)]
 struct RunOptions {
-    #[arg(long)]
+    /// Optimisation steps [default: the task's].
+    #[arg(long, allow_negative_numbers = true, value_parser = values::at_least(1usize))]
     iterations: Option<usize>,
-    /// N: evaluations of the objective per gradient.
-    #[arg(long)]
+    /// N: evaluations of the objective per gradient (even with antithetic pairs) [default:
+    /// the task's].
+    #[arg(long, allow_negative_numbers = true, value_parser = values::at_least(1usize))]
     samples: Option<usize>,
-    #[arg(long)]
+    /// Initial smoothing spread sigma0, in parameter units [default: the task's].
+    #[arg(long, allow_hyphen_values = true, value_parser = values::positive)]
     sigma0: Option<f64>,
-    #[arg(long)]
+    /// Adam's learning rate [default: the task's].
+    #[arg(long, allow_hyphen_values = true, value_parser = values::positive)]
     lr: Option<f64>,
     #[command(flatten)]
     render: RenderOptions,
+    /// How perturbations are drawn [default: radial].
     #[arg(long, value_enum)]
     sampling: Option<SamplerArg>,
-    /// Ablation: no antithetic pairs.
+    /// Ablation: no antithetic pairs (N independent perturbations) [default: pairs].
     #[arg(long)]
     no_antithetic: bool,
-    /// Ablation: constant sigma.
+    /// Ablation: constant sigma = sigma0 [default: the paper's annealing].
     #[arg(long)]
     no_anneal: bool,
-    /// plateau (default), fd or spsa.
+    /// How the gradient is obtained: plateau (the paper's), fd (central finite differences)
+    /// or spsa [default: plateau].
     #[arg(long, value_enum)]
     method: Option<Method>,
-    /// Renderer seeds: fixed (every render uses the run's seed, as the paper's code) or pair.
+    /// Renderer seeds: fixed (every render uses the run's seed, as the paper's code) or pair
+    /// (a fresh seed per antithetic pair) [default: fixed].
     #[arg(long, value_enum)]
     crn: Option<Crn>,
-    /// Finite-difference step (normalised units).
-    #[arg(long)]
+    /// Finite-difference step, in parameter units (with --method fd) [default: 0.001].
+    #[arg(long, allow_hyphen_values = true, value_parser = values::positive)]
     fd_step: Option<f64>,
-    /// Render the current parameters for the image-error curve every this many iterations.
-    #[arg(long)]
+    /// Render the current parameters for the image-error curve every this many iterations
+    /// [default: a hundredth of the iterations].
+    #[arg(long, allow_negative_numbers = true, value_parser = values::at_least(1usize))]
     eval_every: Option<usize>,
     /// A time budget in seconds: picks resolution, spp (and if need be iterations) to fit,
-    /// from the measured cost model, and stops when the budget is spent.
-    #[arg(long)]
+    /// from the measured cost model, and stops when the budget is spent [default: none].
+    #[arg(long, allow_hyphen_values = true, value_parser = values::positive)]
     budget: Option<f64>,
     /// No progress bar.
     #[arg(long)]
@@ -93,14 +102,16 @@ impl RunOptions {
 pub(super) fn run(args: Args) -> Result<()> {
     let Args { task, opts, out } = args;
     let task = find_task(&task)?;
+    let samples = opts.samples.unwrap_or(task.defaults().samples);
+    let plateau = opts.method.unwrap_or(Method::Plateau) == Method::Plateau;
+    if plateau && samples % 2 == 1 && !opts.no_antithetic {
+        return Err(usage(format!(
+            "--samples {samples}: antithetic pairs need an even number; allowed: an even count, or add --no-antithetic"
+        )));
+    }
     with_threads(opts.render.threads, || {
         let mut settings = opts.settings(&task);
         if let Some(budget) = opts.budget {
-            if !(budget.is_finite() && budget > 0.0) {
-                return Err(
-                    format!("--budget must be a positive number of seconds, got {budget}").into(),
-                );
-            }
             let (plan, why) = run::plan_for_budget(&task, &settings, budget);
             eprintln!("{why}");
             settings = plan;

@@ -2,30 +2,33 @@
 
 use std::path::PathBuf;
 
-use super::{find_task, with_threads, RenderOptions};
+use super::{find_task, usage, values, with_threads, RenderOptions};
 use crate::render;
 use crate::report::Result;
 
 /// The options of `render`.
 #[derive(clap::Args)]
 pub(super) struct Args {
+    /// The task: cup, shadow, occlusion, gi, sort, caustic or texture.
+    #[arg(value_parser = values::task)]
     task: String,
-    /// The start parameters.
+    /// Render at the start parameters.
     #[arg(long, conflicts_with_all = ["target", "params"])]
     initial: bool,
-    /// The target parameters (the default).
+    /// Render at the target parameters (the default).
     #[arg(long, conflicts_with = "params")]
     target: bool,
-    /// Explicit parameters, comma-separated.
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    /// Render at these parameters, comma-separated (as many as the task has) [default: the
+    /// target's, or with --initial the start's].
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_parser = values::finite)]
     params: Option<Vec<f64>>,
     #[command(flatten)]
     render: RenderOptions,
     /// Render this many times and print the median time (the image is the last one).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = values::at_least(1usize))]
     repeat: usize,
-    /// A .png (sRGB) or .exr (linear) file.
-    #[arg(long)]
+    /// The image to write: a .png (sRGB) or .exr (linear) file.
+    #[arg(long, value_parser = values::image_file)]
     out: PathBuf,
 }
 
@@ -39,16 +42,12 @@ pub(super) fn run(args: Args) -> Result<()> {
         None => task.target(),
     };
     if theta.len() != task.dim() {
-        return Err(format!(
-            "{} takes {} parameters, got {}",
-            task.name(),
+        return Err(usage(format!(
+            "--params: {} values; allowed: {} ({}'s parameter count)",
+            theta.len(),
             task.dim(),
-            theta.len()
-        )
-        .into());
-    }
-    if let Some(i) = theta.iter().position(|x| !x.is_finite()) {
-        return Err(format!("parameter {i} is {}", theta[i]).into());
+            task.name()
+        )));
     }
     let o = &args.render;
     with_threads(o.threads, || {

@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::values;
 use crate::report::{self, Result};
 use crate::run;
 use crate::tasks::{self, Task};
@@ -11,7 +12,7 @@ use crate::tasks::{self, Task};
 #[derive(clap::Args)]
 pub(super) struct Args {
     /// The directory of runs.
-    #[arg(long, default_value = "out")]
+    #[arg(long, default_value = "out", value_parser = values::out_dir)]
     out: PathBuf,
     /// The command that produced the runs, for the page.
     #[arg(long, default_value = "cargo run --release -p pathtracer -- all")]

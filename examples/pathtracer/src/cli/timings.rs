@@ -1,6 +1,6 @@
 //! `timings`: every task's median render time at its defaults, as a markdown table.
 
-use super::{median_seconds, with_threads};
+use super::{median_seconds, values, with_threads};
 use crate::render;
 use crate::report::Result;
 use crate::tasks::{self, View};
@@ -9,10 +9,10 @@ use crate::tasks::{self, View};
 #[derive(clap::Args)]
 pub(super) struct Args {
     /// Renders per task; the table shows the median.
-    #[arg(long, default_value_t = 11)]
+    #[arg(long, default_value_t = 11, allow_negative_numbers = true, value_parser = values::at_least(1usize))]
     repeat: usize,
-    /// Worker threads for rendering (default: all cores).
-    #[arg(long)]
+    /// Worker threads for rendering [default: all cores].
+    #[arg(long, allow_negative_numbers = true, value_parser = values::at_least(1usize))]
     threads: Option<usize>,
 }
 

@@ -10,10 +10,13 @@ use crate::report::{self, Result};
 /// One row of `history.csv`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Row {
+    /// The iteration, from 0.
     pub iteration: usize,
+    /// The smoothing spread of the iteration.
     pub sigma: f64,
     /// Mean image MSE over the iteration's perturbed renders.
     pub loss: f64,
+    /// Final parameter MSE.
     pub param_mse: f64,
     /// Image MSE of the current parameters (every `eval_every` iterations).
     pub image_mse: Option<f64>,
@@ -24,45 +27,70 @@ pub struct Row {
 /// `summary.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Summary {
+    /// The task's name.
     pub task: String,
+    /// How the gradient is obtained.
     pub method: Method,
+    /// How perturbations are drawn.
     pub sampling: SamplerArg,
+    /// Whether every perturbation is paired with its negative.
     pub antithetic: bool,
+    /// Whether sigma follows the paper's annealing schedule (else it stays sigma0).
     pub anneal: bool,
+    /// Which renderer seed each evaluation uses.
     pub crn: Crn,
+    /// Optimisation steps.
     pub iterations: usize,
+    /// N: evaluations of the objective per gradient estimate.
     pub samples: usize,
+    /// Samples per pixel of every render.
     pub spp: u32,
+    /// Initial smoothing spread, in parameter units.
     pub sigma0: f64,
+    /// Adam's learning rate.
     pub lr: f64,
+    /// Seed of the renderer's noise and of the estimator's draws.
     pub seed: u64,
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
+    /// Number of parameters.
     pub dim: usize,
+    /// Evaluations of the objective in all.
     pub evaluations: usize,
+    /// Parameter MSE at the start.
     pub initial_param_mse: f64,
+    /// Image MSE at the start.
     pub initial_image_mse: f64,
+    /// Final parameter MSE.
     pub param_mse: f64,
     /// Final image against the reference, both rendered with the run's seed.
     pub image_mse: f64,
     /// Final image against the reference, both rendered with a seed the run never used.
     pub image_mse_other_seed: f64,
+    /// Optimisation time per iteration, seconds.
     pub seconds_per_iteration: f64,
     /// Of which rendering.
     pub render_seconds_per_iteration: f64,
     /// Of which the estimator and Adam (everything but rendering).
     pub overhead_seconds_per_iteration: f64,
+    /// Optimisation time in all, seconds.
     pub seconds_total: f64,
+    /// Whether the time budget stopped the run.
     pub stopped_early: bool,
     /// The final parameters (omitted above 16 dimensions).
     pub final_theta: Option<Vec<f64>>,
+    /// The target parameters (omitted above 16 dimensions).
     pub target_theta: Option<Vec<f64>>,
 }
 
 /// The result of a run.
 #[derive(Serialize, Deserialize)]
 pub struct Outcome {
+    /// `summary.json`.
     pub summary: Summary,
+    /// `history.csv`: one row per iteration.
     pub history: Vec<Row>,
 }
 

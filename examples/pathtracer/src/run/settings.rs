@@ -32,8 +32,12 @@ pub enum Method {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum SamplerArg {
+    /// A uniform direction and a chi-distributed radius: unbiased in every dimension (the
+    /// default).
     Radial,
+    /// Each coordinate from the one-dimensional positivised derivative (the paper's code).
     PerCoordinate,
+    /// Plain Gaussian perturbations (no importance sampling).
     Gaussian,
 }
 
@@ -62,19 +66,33 @@ pub enum Crn {
 /// Everything a run can be told.
 #[derive(Clone, Debug, Serialize)]
 pub struct Settings {
+    /// How the gradient is obtained.
     pub method: Method,
+    /// How perturbations are drawn.
     pub sampling: SamplerArg,
+    /// Whether every perturbation is paired with its negative.
     pub antithetic: bool,
+    /// Whether sigma follows the paper's annealing schedule (else it stays sigma0).
     pub anneal: bool,
+    /// N: evaluations of the objective per gradient estimate.
     pub samples: usize,
+    /// Initial smoothing spread, in parameter units.
     pub sigma0: f64,
+    /// Adam's learning rate.
     pub lr: f64,
+    /// Samples per pixel of every render.
     pub spp: u32,
+    /// Optimisation steps.
     pub iterations: usize,
+    /// Seed of the renderer's noise and of the estimator's draws.
     pub seed: u64,
+    /// Which renderer seed each evaluation uses.
     pub crn: Crn,
+    /// Finite-difference step, in parameter units.
     pub fd_step: f64,
+    /// Horizontal field of view replacing the task's, degrees.
     pub fov_degrees: Option<f64>,
+    /// Resolution multiplier.
     pub scale: Option<f64>,
     /// Render the current parameters for the image-error curve every this many iterations.
     pub eval_every: usize,

@@ -289,6 +289,11 @@ pub fn all() -> Vec<Task> {
     TASKS.iter().map(Task::new).collect()
 }
 
+/// The names of the tasks, in the paper's order (without building any).
+pub fn names() -> impl Iterator<Item = &'static str> {
+    TASKS.iter().map(|e| e.0)
+}
+
 /// The task called `name` (case-insensitive).
 pub fn by_name(name: &str) -> Option<Task> {
     let name = name.to_ascii_lowercase();

@@ -1,0 +1,145 @@
+//! What every command-line value may be: clap value parsers that refuse a bad value while
+//! parsing, before any work, with one line naming the argument, the value and what is
+//! allowed (clap adds the first two; these say the third), and exit code 2.
+
+use std::fmt::Display;
+use std::path::PathBuf;
+use std::str::FromStr;
+
+use crate::tasks;
+
+/// A whole number of at least `min` (a count: iterations, samples, spp, threads, ...).
+pub(super) fn at_least<T>(min: T) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync
+where
+    T: FromStr + PartialOrd + Display + Copy + Send + Sync + 'static,
+{
+    move |s: &str| {
+        s.trim()
+            .parse::<T>()
+            .ok()
+            .filter(|n| *n >= min)
+            .ok_or_else(|| format!("allowed: a whole number >= {min}"))
+    }
+}
+
+/// A finite number.
+pub(super) fn finite(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| "allowed: a finite number".into())
+}
+
+/// A finite number above zero (sigma0, learning rate, scale, step, seconds).
+pub(super) fn positive(s: &str) -> Result<f64, String> {
+    finite(s)
+        .ok()
+        .filter(|v| *v > 0.0)
+        .ok_or_else(|| "allowed: a finite number > 0".into())
+}
+
+/// A horizontal field of view in degrees: a pinhole camera sees less than half the sphere.
+pub(super) fn fov(s: &str) -> Result<f64, String> {
+    finite(s)
+        .ok()
+        .filter(|v| *v > 0.0 && *v < 180.0)
+        .ok_or_else(|| "allowed: degrees, a number > 0 and < 180".into())
+}
+
+/// The name of a task.
+pub(super) fn task(s: &str) -> Result<String, String> {
+    let name = s.to_ascii_lowercase();
+    if tasks::names().any(|n| n == name) {
+        Ok(name)
+    } else {
+        Err(format!(
+            "allowed: {}",
+            tasks::names().collect::<Vec<_>>().join(", ")
+        ))
+    }
+}
+
+/// A directory to write into: new, or an existing directory (not a file).
+pub(super) fn out_dir(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    if s.is_empty() || path.is_file() {
+        Err("allowed: a directory (new or existing), not a file".into())
+    } else {
+        Ok(path)
+    }
+}
+
+/// An image file to write: `.png` (sRGB) or `.exr` (linear), not a directory.
+pub(super) fn image_file(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    let suffix = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match suffix.as_deref() {
+        Some("png" | "exr") if !path.is_dir() => Ok(path),
+        _ => Err("allowed: a file name ending in .png or .exr".into()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_refuse_zero_negatives_and_words() {
+        let count = at_least(1usize);
+        assert_eq!(count("3"), Ok(3));
+        for bad in ["0", "-1", "2.5", "many", ""] {
+            assert_eq!(
+                count(bad),
+                Err("allowed: a whole number >= 1".into()),
+                "{bad}"
+            );
+        }
+        assert_eq!(
+            at_least(2usize)("1"),
+            Err("allowed: a whole number >= 2".into())
+        );
+    }
+
+    #[test]
+    fn numbers_refuse_nan_infinities_and_out_of_range() {
+        assert_eq!(positive("0.5"), Ok(0.5));
+        for bad in ["0", "-1", "NaN", "inf", "-inf", "x"] {
+            assert!(positive(bad).is_err(), "{bad}");
+        }
+        assert_eq!(finite("-2.5"), Ok(-2.5));
+        assert!(finite("nan").is_err());
+        assert_eq!(fov("60"), Ok(60.0));
+        for bad in ["0", "180", "-30", "NaN", "1e9"] {
+            assert!(fov(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn tasks_are_known_names() {
+        assert_eq!(task("SHADOW"), Ok("shadow".into()));
+        let err = task("nope").unwrap_err();
+        assert!(
+            err.contains("cup, shadow, occlusion, gi, sort, caustic, texture"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn outputs_refuse_files_and_unwritable_suffixes() {
+        let file = std::env::temp_dir().join(format!("plateau-values-{}", std::process::id()));
+        std::fs::write(&file, b"x").unwrap();
+        let name = file.to_str().unwrap();
+        assert!(out_dir(name).is_err());
+        assert!(out_dir(std::env::temp_dir().to_str().unwrap()).is_ok());
+        assert!(out_dir("a/new/dir").is_ok());
+        assert!(image_file("a.png").is_ok() && image_file("b.EXR").is_ok());
+        for bad in ["a.jpg", "a", "png", ""] {
+            assert!(image_file(bad).is_err(), "{bad}");
+        }
+        std::fs::remove_file(&file).unwrap();
+    }
+}
