@@ -17,6 +17,7 @@ use rand_xoshiro::{SplitMix64, Xoshiro256PlusPlus};
 /// assert_eq!(plateau::seeding::mix(0), 0xE220_A839_7B1D_CDAF);
 /// ```
 #[must_use]
+#[inline]
 pub fn mix(z: u64) -> u64 {
     SplitMix64::seed_from_u64(z).next_u64()
 }

@@ -4,7 +4,9 @@ use std::path::{Path, PathBuf};
 
 use super::{find_task, usage, values, with_threads, RenderOptions};
 use crate::report::Result;
-use crate::run::{self, Crn, Method, SamplerArg, Settings};
+use plateau::Sampling;
+
+use crate::run::{self, Crn, Method, Settings};
 use crate::tasks::Task;
 
 /// The options of `optimize`.
@@ -39,8 +41,8 @@ struct RunOptions {
     #[command(flatten)]
     render: RenderOptions,
     /// How perturbations are drawn [default: radial].
-    #[arg(long, value_enum)]
-    sampling: Option<SamplerArg>,
+    #[arg(long, value_parser = values::sampling)]
+    sampling: Option<Sampling>,
     /// Ablation: no antithetic pairs (N independent perturbations) [default: pairs].
     #[arg(long)]
     no_antithetic: bool,

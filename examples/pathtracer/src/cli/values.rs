@@ -6,6 +6,8 @@ use std::fmt::Display;
 use std::path::PathBuf;
 use std::str::FromStr;
 
+use plateau::Sampling;
+
 use crate::tasks;
 
 /// A whole number of at least `min` (a count: iterations, samples, spp, threads, ...).
@@ -45,6 +47,14 @@ pub(super) fn fov(s: &str) -> Result<f64, String> {
         .ok()
         .filter(|v| *v > 0.0 && *v < 180.0)
         .ok_or_else(|| "allowed: degrees, a number > 0 and < 180".into())
+}
+
+/// A sampler, by the library's one spelling of its name ([`Sampling`]'s `FromStr`).
+pub(super) fn sampling(s: &str) -> Result<Sampling, String> {
+    s.trim().parse::<Sampling>().map_err(|_| {
+        let names: Vec<&str> = Sampling::ALL.iter().map(|m| m.name()).collect();
+        format!("allowed: {}", names.join(", "))
+    })
 }
 
 /// The name of a task.

@@ -6,13 +6,13 @@ use std::fmt::Write as _;
 use super::{final_mse, page_over_tasks, variants_on_tasks, verdict, with_range, write_page};
 use super::{Options, Variant, TIE_DECADES};
 use crate::report::{sci, spread, Result};
-use crate::run::SamplerArg;
+use plateau::Sampling;
 
 pub(super) fn run(opts: &Options) -> Result<()> {
     let variants: [Variant; 4] = [
         ("full", |_| {}),
         ("no importance sampling", |s| {
-            s.sampling = SamplerArg::Gaussian
+            s.sampling = Sampling::Gaussian
         }),
         ("no annealing", |s| s.anneal = false),
         ("no antithetic", |s| s.antithetic = false),

@@ -166,7 +166,7 @@ fn summary_csv_row(o: &Outcome, extra: &[String]) -> Vec<String> {
     row.extend([
         m.task.clone(),
         format!("{:?}", m.method).to_lowercase(),
-        format!("{:?}", m.sampling).to_lowercase(),
+        m.sampling.to_string(),
         m.antithetic.to_string(),
         m.anneal.to_string(),
         m.samples.to_string(),

@@ -6,13 +6,13 @@ use std::fmt::Write as _;
 use super::{final_mse, page_over_tasks, variants_on_tasks, verdict, with_range, write_page};
 use super::{Options, Variant, TIE_DECADES};
 use crate::report::{sci, spread, Result};
-use crate::run::SamplerArg;
+use plateau::Sampling;
 
 pub(super) fn run(opts: &Options) -> Result<()> {
     let variants: [Variant; 3] = [
-        ("radial", |s| s.sampling = SamplerArg::Radial),
-        ("per-coordinate", |s| s.sampling = SamplerArg::PerCoordinate),
-        ("gaussian", |s| s.sampling = SamplerArg::Gaussian),
+        ("radial", |s| s.sampling = Sampling::Radial),
+        ("per-coordinate", |s| s.sampling = Sampling::PerCoordinate),
+        ("gaussian", |s| s.sampling = Sampling::Gaussian),
     ];
     let per_task = variants_on_tasks(opts, "samplers", &variants)?;
     let seeds = opts.seeds(1).len();

@@ -6,7 +6,9 @@ use std::fmt::Write as _;
 
 use super::{cache, fit_line, header, summary_csv_row, task, write_page, Options};
 use crate::report::{self, sci, spread, Axes, Result, Series};
-use crate::run::{self, SamplerArg, Settings};
+use plateau::Sampling;
+
+use crate::run::{self, Settings};
 
 pub(super) fn run(opts: &Options) -> Result<()> {
     let mut csv = Vec::new();
@@ -46,10 +48,10 @@ pub(super) fn run(opts: &Options) -> Result<()> {
             s.scale = (scale != 1.0).then_some(scale);
             configs.push((format!("scale={scale}"), s));
         }
-        for sampler in [SamplerArg::PerCoordinate, SamplerArg::Gaussian] {
+        for sampler in [Sampling::PerCoordinate, Sampling::Gaussian] {
             let mut s = base.clone();
             s.sampling = sampler;
-            configs.push((format!("{sampler:?}").to_lowercase(), s));
+            configs.push((sampler.to_string(), s));
         }
         let mut results = Vec::new();
         let mut ran = Vec::new();

@@ -5,13 +5,16 @@
 //! pixel. Two renders with the same seed share their random numbers (common random numbers),
 //! which is what makes the two members of an antithetic pair comparable.
 
-/// One avalanche round of SplitMix64: a bijective 64-bit mixer with good diffusion.
+/// SplitMix64's avalanche: a bijective 64-bit mixer with good diffusion. The library's
+/// [`plateau::seeding::mix`] is SplitMix64's whole step (it adds the golden-ratio increment
+/// first), so `mix64(z)` is `mix(z - increment)`.
 #[inline(always)]
-fn mix64(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+fn mix64(z: u64) -> u64 {
+    plateau::seeding::mix(z.wrapping_sub(GOLDEN))
 }
+
+/// SplitMix64's increment, the golden ratio in 64 bits.
+const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
 
 /// A SplitMix64 stream; cheap (two multiplies per 64 bits), no allocation, `Copy`.
 #[derive(Clone, Copy, Debug)]
@@ -33,8 +36,9 @@ impl Sampler {
     /// The next 64 random bits.
     #[inline(always)]
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        mix64(self.state)
+        let z = self.state;
+        self.state = self.state.wrapping_add(GOLDEN);
+        plateau::seeding::mix(z)
     }
 
     /// A uniform number in [0, 1) with 24 bits of resolution (exactly representable in f32).

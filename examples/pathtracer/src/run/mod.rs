@@ -24,7 +24,7 @@ use plateau::{
 
 pub use budget::{plan_for_budget, plan_with_render_time};
 pub use outcome::{write_history, Outcome, Row, Summary};
-pub use settings::{eval_every, Crn, Method, SamplerArg, Settings, CURVE_POINTS};
+pub use settings::{eval_every, Crn, Method, Settings, CURVE_POINTS};
 
 use crate::render::Image;
 use crate::report::Result;
@@ -107,7 +107,7 @@ where
         Method::Plateau => Box::new(
             PlateauFreeGradient::new(Seeded(loss))
                 .samples(s.samples)
-                .sampling(s.sampling.into())
+                .sampling(s.sampling)
                 .antithetic(s.antithetic)
                 .seed(s.seed),
         ),

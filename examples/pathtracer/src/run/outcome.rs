@@ -4,7 +4,9 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::{Crn, Method, SamplerArg};
+use plateau::Sampling;
+
+use super::{Crn, Method};
 use crate::report::{self, Result};
 
 /// One row of `history.csv`.
@@ -32,7 +34,7 @@ pub struct Summary {
     /// How the gradient is obtained.
     pub method: Method,
     /// How perturbations are drawn.
-    pub sampling: SamplerArg,
+    pub sampling: Sampling,
     /// Whether every perturbation is paired with its negative.
     pub antithetic: bool,
     /// Whether sigma follows the paper's annealing schedule (else it stays sigma0).

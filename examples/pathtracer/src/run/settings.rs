@@ -28,29 +28,6 @@ pub enum Method {
     Spsa,
 }
 
-/// The sampler, as named on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum SamplerArg {
-    /// A uniform direction and a chi-distributed radius: unbiased in every dimension (the
-    /// default).
-    Radial,
-    /// Each coordinate from the one-dimensional positivised derivative (the paper's code).
-    PerCoordinate,
-    /// Plain Gaussian perturbations (no importance sampling).
-    Gaussian,
-}
-
-impl From<SamplerArg> for Sampling {
-    fn from(s: SamplerArg) -> Self {
-        match s {
-            SamplerArg::Radial => Sampling::Radial,
-            SamplerArg::PerCoordinate => Sampling::PerCoordinate,
-            SamplerArg::Gaussian => Sampling::Gaussian,
-        }
-    }
-}
-
 /// Which renderer seed each evaluation uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -69,7 +46,7 @@ pub struct Settings {
     /// How the gradient is obtained.
     pub method: Method,
     /// How perturbations are drawn.
-    pub sampling: SamplerArg,
+    pub sampling: Sampling,
     /// Whether every perturbation is paired with its negative.
     pub antithetic: bool,
     /// Whether sigma follows the paper's annealing schedule (else it stays sigma0).
@@ -106,7 +83,7 @@ impl Settings {
         let d = task.defaults();
         Settings {
             method: Method::Plateau,
-            sampling: SamplerArg::Radial,
+            sampling: Sampling::Radial,
             antithetic: true,
             anneal: true,
             samples: d.samples,
