@@ -21,6 +21,9 @@
 //! ([`Annealer`]) shrinks `sigma` as the optimisation closes in, and [`Adam`] takes the steps.
 //!
 //! ## The crate in one screen
+//! - [`minimize`]`(f, x0, budget)`: the first thing to try, with no step size or learning rate
+//!   to choose; [`Minimizer`] for options (bounds, seed, target, the paper's loop). A Gaussian
+//!   search distribution whose spread and metric adapt to `f`, with restarts.
 //! - [`PlateauFreeGradient`]: the estimator for any `Fn(&[f64]) -> f64`, a seeded closure
 //!   ([`Seeded`], for common random numbers), a batch closure ([`Batch`]) or any
 //!   [`Objective`]; returns an [`Estimate`].
@@ -53,11 +56,13 @@
 #![warn(missing_docs)]
 
 mod adam;
+mod adaptive;
 mod anneal;
 pub mod baseline;
 mod error;
 mod estimator;
 pub mod kernel;
+mod minimize;
 mod objective;
 mod optimize;
 mod sampling;
@@ -66,6 +71,7 @@ pub use adam::Adam;
 pub use anneal::{Annealer, Schedule, PAPER_SIGMA_MIN, PAPER_WARMUP};
 pub use error::Error;
 pub use estimator::{Estimate, GradientEstimator, PlateauFreeGradient};
+pub use minimize::{minimize, Metric, Minimizer, Minimum, Stop, Strategy, FULL_METRIC_MAX_DIM};
 pub use objective::{Batch, Objective, Points, Seeded};
 pub use optimize::{History, Optimizer, Step};
 pub use sampling::Sampling;
