@@ -27,6 +27,8 @@
 //! - [`PlateauFreeGradient`]: the estimator for any `Fn(&[f64]) -> f64`, a seeded closure
 //!   ([`Seeded`], for common random numbers), a batch closure ([`Batch`]) or any
 //!   [`Objective`]; returns an [`Estimate`].
+//! - [`smoothed_hessian`]: the Hessian of the Gaussian-smoothed objective from values of `f`
+//!   (antithetic pairs and a control variate), with standard errors.
 //! - [`Sampling`]: `Radial` (default, exact in every dimension), `PerCoordinate` (the paper's
 //!   reference sampler), `Gaussian` (plain evolution strategies).
 //! - [`Annealer`]: the paper's warm-start-then-linear schedule, and constant, exponential and
@@ -61,6 +63,7 @@ mod anneal;
 pub mod baseline;
 mod error;
 mod estimator;
+mod hessian;
 pub mod kernel;
 mod minimize;
 mod objective;
@@ -71,6 +74,7 @@ pub use adam::Adam;
 pub use anneal::{Annealer, Schedule, PAPER_SIGMA_MIN, PAPER_WARMUP};
 pub use error::Error;
 pub use estimator::{Estimate, GradientEstimator, PlateauFreeGradient};
+pub use hessian::{smoothed_hessian, HessianEstimate};
 pub use minimize::{minimize, Metric, Minimizer, Minimum, Stop, Strategy, FULL_METRIC_MAX_DIM};
 pub use objective::{Batch, Objective, Points, Seeded};
 pub use optimize::{History, Optimizer, Step};
