@@ -415,9 +415,9 @@ fn write_outputs(args: &Args, runs: &[Run]) -> std::io::Result<()> {
     writeln!(md, "Methods:\n").unwrap();
     for m in methods {
         let what = match m {
-            Method::Minimize => "`plateau::minimize(f, x0, budget)` with its defaults (`Minimizer::new(f).budget(b).seed(s)`): no step size given",
-            Method::Cmaes => "the `cmaes` crate (0.2), one run from x0, step size 2, default population and stopping rules (a run that stops early leaves budget unused)",
-            Method::CmaesIpop => "the `cmaes` crate's IPOP restarts over [-5, 5]^n (population doubled per restart), the whole budget",
+            Method::Minimize => "`plateau::minimize(f, x0, budget)` with its defaults (`Minimizer::new(f).budget(b).seed(s).target(1e-8)`; the target only ends a run early once every target is reached): no step size given",
+            Method::Cmaes => "the `cmaes` crate (0.2), one run from x0, step size 2, default population and stopping rules, `fun_target(1e-8)` (a run that stops early leaves budget unused)",
+            Method::CmaesIpop => "the `cmaes` crate's IPOP restarts over [-5, 5]^n (population doubled per restart), the whole budget, `fun_target(1e-8)`",
             Method::Random => "uniform random points in [-5, 5]^n (after x0)",
             Method::Paper => "the paper's loop with the README's settings: N = 4 radial antithetic samples, Adam lr 0.02, `Annealer::paper(0.5, budget / 4)`",
         };
