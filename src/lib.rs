@@ -21,9 +21,14 @@
 //! ([`Annealer`]) shrinks `sigma` as the optimisation closes in, and [`Adam`] takes the steps.
 //!
 //! ## The crate in one screen
+//! - [`minimize`]`(f, x0, budget)`: the first thing to try, with no step size or learning rate
+//!   to choose; [`Minimizer`] for options (bounds, seed, target, the paper's loop). A Gaussian
+//!   search distribution whose spread and metric adapt to `f`, with restarts.
 //! - [`PlateauFreeGradient`]: the estimator for any `Fn(&[f64]) -> f64`, a seeded closure
 //!   ([`Seeded`], for common random numbers), a batch closure ([`Batch`]) or any
 //!   [`Objective`]; returns an [`Estimate`].
+//! - [`smoothed_hessian`]: the Hessian of the Gaussian-smoothed objective from values of `f`
+//!   (antithetic pairs and a control variate), with standard errors.
 //! - [`Sampling`]: `Radial` (default, exact in every dimension), `PerCoordinate` (the paper's
 //!   reference sampler), `Gaussian` (plain evolution strategies).
 //! - [`Annealer`]: the paper's warm-start-then-linear schedule, and constant, exponential and
@@ -61,12 +66,15 @@
 #![warn(missing_docs, missing_debug_implementations)]
 
 mod adam;
+mod adaptive;
 mod anneal;
 pub mod baseline;
 mod check;
 mod error;
 mod estimator;
+mod hessian;
 pub mod kernel;
+mod minimize;
 mod objective;
 mod optimize;
 mod sampling;
@@ -76,6 +84,8 @@ pub use adam::Adam;
 pub use anneal::{Annealer, Schedule, PAPER_SIGMA_MIN, PAPER_WARMUP};
 pub use error::Error;
 pub use estimator::{Estimate, GradientEstimator, PlateauFreeGradient};
+pub use hessian::{smoothed_hessian, HessianEstimate};
+pub use minimize::{minimize, Metric, Minimizer, Minimum, Stop, Strategy, FULL_METRIC_MAX_DIM};
 pub use objective::{Batch, Objective, Points, Seeded};
 pub use optimize::{History, Optimizer, Step};
 pub use sampling::Sampling;

@@ -1,0 +1,440 @@
+//! The adaptive search distribution behind [`crate::minimize`]: a Gaussian whose mean, spread
+//! and covariance follow the function.
+//!
+//! Each generation draws `lambda` points `x_k = m + sigma * y_k`, `y_k ~ N(0, C)`, ranks them by
+//! `f`, and moves the mean along the rank-weighted sum of the best offsets. That sum is the
+//! natural gradient of the Gaussian-smoothed, rank-transformed objective
+//! `E_{x ~ N(m, sigma^2 C)} w(f(x))` with respect to `m` (the information-geometric view of
+//! evolution strategies: Ollivier, Arnold, Auger and Hansen, "Information-Geometric Optimization
+//! Algorithms", JMLR 18, 2017): the plateau-free gradient of this crate, with ranks in place of
+//! values so that the scale of `f` does not matter, and with a smoothing kernel that adapts.
+//!
+//! The spread and the metric follow the published CMA-ES update rules (Hansen, "The CMA
+//! Evolution Strategy: A Tutorial", arXiv:1604.00772, 2016, with the active update with
+//! negative weights of Jastrebski and Arnold, CEC 2006): cumulative step-size adaptation
+//! shrinks `sigma` while successive steps cancel (progress made, optimum near) and grows it
+//! while they align; the covariance learns the function's metric from the selected steps,
+//! which is what ill-conditioned and rotated problems need. There is no floor on `sigma`.
+//!
+//! Two rules are this crate's own, for plateaus:
+//! - **flat generation**: when the best quarter of a generation ties with its best value, the
+//!   points cannot be told apart; `sigma` grows by `exp(0.2 + c_sigma / d_sigma)` so that the
+//!   smoothing widens until it feels a change of `f` (the paper's large `sigma_0`, found
+//!   automatically instead of guessed).
+//! - **restarts from the best point seen** with a doubled population (IPOP: Auger and Hansen,
+//!   CEC 2005) when a run has converged or stalls; a larger population is a smoother, more
+//!   global estimate of the smoothed function's gradient, which multimodal functions need.
+//!
+//! Implemented here from the published formulas; no code is taken from any other project.
+
+use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+/// The strategy parameters for a dimension and population size (Hansen 2016, Table 1).
+#[derive(Debug, Clone)]
+pub(crate) struct Params {
+    pub lambda: usize,
+    pub mu: usize,
+    /// `lambda` weights: positive for the best `mu`, negative (active update) for the rest.
+    pub weights: Vec<f64>,
+    pub mueff: f64,
+    pub cc: f64,
+    pub cs: f64,
+    pub c1: f64,
+    pub cmu: f64,
+    pub ds: f64,
+    /// `E ||N(0, I)||`.
+    pub chi_n: f64,
+}
+
+impl Params {
+    pub fn new(n: usize, lambda: usize) -> Params {
+        let nf = n as f64;
+        let lambda = lambda.max(2);
+        let mu = lambda / 2;
+        let raw: Vec<f64> = (0..lambda)
+            .map(|i| ((lambda as f64 + 1.0) / 2.0).ln() - ((i + 1) as f64).ln())
+            .collect();
+        let pos_sum: f64 = raw[..mu].iter().sum();
+        let pos_sq: f64 = raw[..mu].iter().map(|w| w * w).sum();
+        let mueff = pos_sum * pos_sum / pos_sq;
+        let neg_sum: f64 = raw[mu..].iter().filter(|w| **w < 0.0).sum();
+        let neg_sq: f64 = raw[mu..].iter().filter(|w| **w < 0.0).map(|w| w * w).sum();
+        let mueff_neg = if neg_sq > 0.0 {
+            neg_sum * neg_sum / neg_sq
+        } else {
+            0.0
+        };
+        let cc = (4.0 + mueff / nf) / (nf + 4.0 + 2.0 * mueff / nf);
+        let cs = (mueff + 2.0) / (nf + mueff + 5.0);
+        let c1 = 2.0 / ((nf + 1.3).powi(2) + mueff);
+        let cmu = (2.0 * (mueff - 2.0 + 1.0 / mueff) / ((nf + 2.0).powi(2) + mueff))
+            .min(1.0 - c1)
+            .max(0.0);
+        let ds = 1.0 + 2.0 * (((mueff - 1.0) / (nf + 1.0)).sqrt() - 1.0).max(0.0) + cs;
+        let mut weights = Vec::with_capacity(lambda);
+        weights.extend(raw[..mu].iter().map(|w| w / pos_sum));
+        let neg_scale = if neg_sum < 0.0 && cmu > 0.0 {
+            let alpha_mu = 1.0 + c1 / cmu;
+            let alpha_mueff = 1.0 + 2.0 * mueff_neg / (mueff + 2.0);
+            let alpha_posdef = (1.0 - c1 - cmu) / (nf * cmu);
+            alpha_mu.min(alpha_mueff).min(alpha_posdef) / -neg_sum
+        } else {
+            0.0
+        };
+        weights.extend(raw[mu..].iter().map(|w| w.min(0.0) * neg_scale));
+        let chi_n = nf.sqrt() * (1.0 - 1.0 / (4.0 * nf) + 1.0 / (21.0 * nf * nf));
+        Params {
+            lambda,
+            mu,
+            weights,
+            mueff,
+            cc,
+            cs,
+            c1,
+            cmu,
+            ds,
+            chi_n,
+        }
+    }
+
+    /// The default population: `4 + floor(3 ln n)`.
+    pub fn default_lambda(n: usize) -> usize {
+        4 + (3.0 * (n as f64).ln()).floor() as usize
+    }
+}
+
+/// Why one run of the search distribution ended (and a restart is due).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum RunEnd {
+    /// The spread became negligible next to the mean (converged to the working precision).
+    TolX,
+    /// The values of the last generations are all within `1e-12` of each other.
+    TolFun,
+    /// The covariance's condition number passed `1e14`.
+    Condition,
+    /// The best value of a generation has not improved for a long window.
+    Stagnation,
+    /// The spread grew beyond `1e8` times its start: the function looks flat everywhere.
+    Flat,
+}
+
+/// One run: a Gaussian `N(m, sigma^2 C)` and its evolution paths.
+pub(crate) struct SearchGaussian {
+    pub n: usize,
+    pub p: Params,
+    pub mean: DVector<f64>,
+    pub sigma: f64,
+    sigma_start: f64,
+    /// The full covariance and its eigenvectors (columns), or `None` for a diagonal one
+    /// (whose variances are `d^2`).
+    full: Option<(DMatrix<f64>, DMatrix<f64>)>,
+    /// The learning rates of the covariance (scaled up for a diagonal one).
+    c1: f64,
+    cmu: f64,
+    /// Square roots of the eigenvalues of `cov`.
+    d: DVector<f64>,
+    ps: DVector<f64>,
+    pc: DVector<f64>,
+    pub generation: usize,
+    eigen_generation: usize,
+    /// The best value of every generation of this run.
+    best_history: Vec<f64>,
+    /// The median value of every generation of this run.
+    median_history: Vec<f64>,
+    /// Mirror every other draw (`y_{2k+1} = -y_{2k}`): the antithetic pairs of the paper.
+    pub mirrored: bool,
+    /// Grow sigma on flat generations.
+    pub flat_growth: bool,
+}
+
+/// One generation's draws: `ys` are the offsets `y_k` (so that `x_k = m + sigma y_k`).
+pub(crate) struct Generation {
+    pub ys: Vec<DVector<f64>>,
+}
+
+impl SearchGaussian {
+    /// A run at `mean` with spread `sigma` and a covariance `diag(scales^2)` to start with,
+    /// full (learns any metric) or diagonal (learns per-coordinate scales only, `O(n)` per
+    /// sample: separable CMA-ES, Ros and Hansen, PPSN 2008, with its faster rates capped by
+    /// [`DIAGONAL_RATE_CAP`]).
+    pub fn new(
+        mean: &[f64],
+        sigma: f64,
+        scales: &[f64],
+        lambda: usize,
+        full: bool,
+    ) -> SearchGaussian {
+        let n = mean.len();
+        let p = Params::new(n, lambda);
+        let d = DVector::from_column_slice(scales);
+        let (c1, cmu, full) = if full {
+            let cov = DMatrix::from_diagonal(&d.map(|s| s * s));
+            (p.c1, p.cmu, Some((cov, DMatrix::identity(n, n))))
+        } else {
+            let k = ((n as f64 + 2.0) / 3.0).min(DIAGONAL_RATE_CAP);
+            let c1 = (p.c1 * k).min(0.5);
+            (c1, (p.cmu * k).min(1.0 - c1 - 1e-3).max(0.0), None)
+        };
+        SearchGaussian {
+            n,
+            p,
+            mean: DVector::from_column_slice(mean),
+            sigma,
+            sigma_start: sigma,
+            full,
+            c1,
+            cmu,
+            d,
+            ps: DVector::zeros(n),
+            pc: DVector::zeros(n),
+            generation: 0,
+            eigen_generation: 0,
+            best_history: Vec::new(),
+            median_history: Vec::new(),
+            mirrored: false,
+            flat_growth: true,
+        }
+    }
+
+    /// Draws a generation's offsets.
+    pub fn sample(&self, rng: &mut Xoshiro256PlusPlus) -> Generation {
+        let n = self.n;
+        let mut ys = Vec::with_capacity(self.p.lambda);
+        for k in 0..self.p.lambda {
+            if self.mirrored && k % 2 == 1 {
+                let prev: &DVector<f64> = &ys[k - 1];
+                ys.push(-prev);
+                continue;
+            }
+            let z = DVector::from_fn(n, |i, _| {
+                let v: f64 = StandardNormal.sample(rng);
+                v * self.d[i]
+            });
+            match &self.full {
+                Some((_, b)) => ys.push(b * z),
+                None => ys.push(z),
+            }
+        }
+        Generation { ys }
+    }
+
+    /// The point of offset `y`.
+    pub fn point(&self, y: &DVector<f64>) -> DVector<f64> {
+        &self.mean + y * self.sigma
+    }
+
+    /// `C^{-1/2} y`.
+    fn inv_sqrt(&self, y: &DVector<f64>) -> DVector<f64> {
+        match &self.full {
+            Some((_, b)) => {
+                let mut t = b.tr_mul(y);
+                for (ti, di) in t.iter_mut().zip(self.d.iter()) {
+                    *ti /= *di;
+                }
+                b * t
+            }
+            None => y.component_div(&self.d),
+        }
+    }
+
+    /// The variance of coordinate `i` (before `sigma^2`).
+    fn variance(&self, i: usize) -> f64 {
+        match &self.full {
+            Some((cov, _)) => cov[(i, i)],
+            None => self.d[i] * self.d[i],
+        }
+    }
+
+    /// Updates the distribution from a generation's offsets (already repaired to the points
+    /// actually evaluated) and their values. Returns why the run should end, if it should.
+    pub fn update(&mut self, ys: &[DVector<f64>], values: &[f64]) -> Option<RunEnd> {
+        let n = self.n;
+        let nf = n as f64;
+        let p = &self.p;
+        let lambda = ys.len();
+        let mut order: Vec<usize> = (0..lambda).collect();
+        order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
+        let best = values[order[0]];
+        let worst = values[order[lambda - 1]];
+        // A flat generation: the best quarter ties (measured against half and a tenth, and
+        // against counting distinct values: docs/convergence.md).
+        let flat = values[order[lambda / 4]] == best;
+
+        // Mean: the rank-weighted natural-gradient step.
+        let mut yw = DVector::zeros(n);
+        for (rank, &k) in order.iter().take(p.mu).enumerate() {
+            yw.axpy(p.weights[rank], &ys[k], 1.0);
+        }
+        self.mean.axpy(self.sigma, &yw, 1.0);
+
+        // Evolution paths.
+        let cs = p.cs;
+        let inv = self.inv_sqrt(&yw);
+        self.ps
+            .axpy((cs * (2.0 - cs) * p.mueff).sqrt(), &inv, 1.0 - cs);
+        let ps_norm = self.ps.norm();
+        let g1 = (self.generation + 1) as f64;
+        let hsig =
+            ps_norm / (1.0 - (1.0 - cs).powf(2.0 * g1)).sqrt() < (1.4 + 2.0 / (nf + 1.0)) * p.chi_n;
+        let hs = if hsig { 1.0 } else { 0.0 };
+        let cc = p.cc;
+        self.pc
+            .axpy(hs * (cc * (2.0 - cc) * p.mueff).sqrt(), &yw, 1.0 - cc);
+
+        // Covariance: rank-one, rank-mu and the active (negative) update.
+        let (c1, cmu) = (self.c1, self.cmu);
+        let wsum: f64 = p.weights.iter().take(lambda).sum();
+        let decay = 1.0 + c1 * (1.0 - hs) * cc * (2.0 - cc) - c1 - cmu * wsum;
+        let mut terms = Vec::with_capacity(lambda);
+        for (rank, &k) in order.iter().enumerate() {
+            let mut w = p.weights[rank];
+            if w == 0.0 {
+                continue;
+            }
+            if w < 0.0 && self.full.is_none() {
+                // The active update's weights are sized for the full metric's rates; the
+                // diagonal one (rates (n + 2) / 3 times larger) uses positive weights only,
+                // as separable CMA-ES does (with them it lost positive definiteness on a 2-D
+                // rotated ellipse: tests/minimize.rs).
+                continue;
+            }
+            if w < 0.0 {
+                let norm2 = self.inv_sqrt(&ys[k]).norm_squared();
+                if norm2 > 0.0 {
+                    w *= nf / norm2;
+                }
+            }
+            terms.push((cmu * w, k));
+        }
+        match &mut self.full {
+            Some((cov, _)) => {
+                *cov *= decay;
+                cov.ger(c1, &self.pc, &self.pc, 1.0);
+                for &(w, k) in &terms {
+                    cov.ger(w, &ys[k], &ys[k], 1.0);
+                }
+            }
+            None => {
+                let mut var = self.d.map(|d| d * d * decay);
+                var.zip_apply(&self.pc, |v, p| *v += c1 * p * p);
+                for &(w, k) in &terms {
+                    var.zip_apply(&ys[k], |v, y| *v += w * y * y);
+                }
+                let floor = var.max().abs() * 1e-20 + f64::MIN_POSITIVE;
+                self.d = var.map(|v| v.max(floor).sqrt());
+            }
+        }
+
+        // Step size: cumulative step-size adaptation, and growth on flat generations.
+        let step = (cs / p.ds * (ps_norm / p.chi_n - 1.0)).min(1.0);
+        self.sigma *= step.exp();
+        if flat && self.flat_growth {
+            self.sigma *= (0.2 + cs / p.ds).exp();
+        }
+        self.generation += 1;
+
+        // Eigendecomposition, lazily (every ~1/(10 n (c1 + cmu)) generations).
+        // At least every n/10 (and n^2/400) generations: at n = 100 the tutorial's gap is ~1
+        // generation and the O(n^3) decomposition would dominate the run.
+        let gap = (1.0 / (10.0 * nf * (c1 + cmu)))
+            .max(nf / 10.0)
+            .max(nf * nf / 400.0)
+            .floor()
+            .max(1.0) as usize;
+        if self.full.is_some() && self.generation - self.eigen_generation >= gap {
+            self.decompose();
+        }
+
+        self.best_history.push(best);
+        self.median_history.push(values[order[lambda / 2]]);
+        self.check_end(flat, best, worst)
+    }
+
+    fn decompose(&mut self) {
+        self.eigen_generation = self.generation;
+        let Some((cov, b)) = &mut self.full else {
+            return;
+        };
+        let sym = (&*cov + cov.transpose()) * 0.5;
+        let eig = SymmetricEigen::new(sym);
+        let floor = eig.eigenvalues.max().abs() * 1e-20 + f64::MIN_POSITIVE;
+        self.d = eig.eigenvalues.map(|e| e.max(floor).sqrt());
+        *b = eig.eigenvectors;
+        *cov = &*b * DMatrix::from_diagonal(&self.d.map(|d| d * d)) * b.transpose();
+    }
+
+    fn check_end(&self, flat: bool, best: f64, worst: f64) -> Option<RunEnd> {
+        let n = self.n;
+        let max_d = self.d.max();
+        let min_d = self.d.min();
+        let diag_max = (0..n).map(|i| self.variance(i)).fold(0.0, f64::max).sqrt();
+        if self.sigma * max_d > 1e8 * self.sigma_start {
+            return Some(RunEnd::Flat);
+        }
+        if self.sigma * diag_max < 1e-12 * self.sigma_start
+            || (0..n).all(|i| {
+                let m = self.mean[i];
+                m + 0.2 * self.sigma * self.variance(i).sqrt() == m
+            })
+        {
+            return Some(RunEnd::TolX);
+        }
+        if (max_d / min_d).powi(2) > 1e14 {
+            return Some(RunEnd::Condition);
+        }
+        let lambda = self.p.lambda as f64;
+        let window = 10 + (30.0 * n as f64 / lambda).ceil() as usize;
+        if !flat && self.best_history.len() >= window {
+            let recent = &self.best_history[self.best_history.len() - window..];
+            let hi = recent.iter().copied().fold(worst, f64::max);
+            let lo = recent.iter().copied().fold(best, f64::min);
+            if hi - lo <= 1e-12f64.max(1e-15 * lo.abs()) {
+                return Some(RunEnd::TolFun);
+            }
+        }
+        let stall = 120 + (30.0 * n as f64 / lambda).ceil() as usize;
+        let median = |s: &[f64]| {
+            let mut v = s.to_vec();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        // Neither the generations' best nor their median values improved over the window.
+        let stalled = |h: &[f64]| {
+            h.len() >= stall + 20
+                && median(&h[h.len() - 20..]) >= median(&h[h.len() - stall - 20..h.len() - stall])
+        };
+        if stalled(&self.best_history) && stalled(&self.median_history) {
+            return Some(RunEnd::Stagnation);
+        }
+        None
+    }
+}
+
+/// The cap on the diagonal metric's learning-rate factor `(n + 2) / 3` of separable CMA-ES:
+/// 1, i.e. the full metric's rates. Uncapped, the diagonal run stalled with a collapsing spread
+/// on the large-n sphere and a 2-D ellipse of `tests/minimize.rs`.
+pub(crate) const DIAGONAL_RATE_CAP: f64 = 1.0;
+
+/// A generator for a run's seed.
+pub(crate) fn rng(seed: u64) -> Xoshiro256PlusPlus {
+    Xoshiro256PlusPlus::seed_from_u64(seed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn weights_sum_to_one_and_are_sorted() {
+        for n in [1, 2, 10, 100] {
+            let p = Params::new(n, Params::default_lambda(n));
+            let pos: f64 = p.weights[..p.mu].iter().sum();
+            assert!((pos - 1.0).abs() < 1e-12);
+            assert!(p.weights.windows(2).all(|w| w[0] >= w[1]));
+            assert!(p.cmu > 0.0 && p.c1 > 0.0 && p.c1 + p.cmu <= 1.0);
+        }
+    }
+}

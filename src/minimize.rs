@@ -1,0 +1,618 @@
+//! `minimize(f, x0, budget)`: the entry point for users who bring only a function, a start
+//! and a number of evaluations, and [`Minimizer`], the builder beside it.
+
+use std::cell::{Cell, RefCell};
+use std::fmt;
+
+use crate::adam::Adam;
+use crate::adaptive::{rng, Params, RunEnd, SearchGaussian};
+use crate::anneal::Annealer;
+use crate::check;
+use crate::error::Error;
+use crate::estimator::PlateauFreeGradient;
+use crate::objective::{Objective, Points};
+use crate::optimize::Optimizer;
+
+/// Minimises `f` from `x0` with at most `budget` evaluations of `f`, with no other setting to
+/// choose: the first thing to try.
+///
+/// The search is a Gaussian smoothing of `f` whose spread and metric adapt to the function
+/// (see [`Minimizer`] for the method and its options). It returns the best point seen and its
+/// value.
+///
+/// ```
+/// // A staircase: the squared distance of the rounded point to an integer target.
+/// let target = [1.0, -2.0, 3.0];
+/// let f = |x: &[f64]| x.iter().zip(&target).map(|(v, t)| (v.round() - t).powi(2)).sum::<f64>();
+/// let best = plateau::minimize(f, &[0.0; 3], 2000)?;
+/// assert_eq!(best.fun, 0.0);
+/// assert!(best.evaluations <= 2000);
+/// # Ok::<(), plateau::Error>(())
+/// ```
+///
+/// # Errors
+/// An empty or non-finite `x0`, a zero budget, or `f` returning NaN or an infinity
+/// ([`Error::NonFiniteValue`], with the point).
+pub fn minimize<F: Fn(&[f64]) -> f64>(f: F, x0: &[f64], budget: usize) -> Result<Minimum, Error> {
+    Minimizer::new(f).budget(budget).run(x0)
+}
+
+/// Why a run of [`Minimizer`] ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stop {
+    /// The budget of evaluations is spent.
+    Budget,
+    /// The best value reached [`Minimizer::target`].
+    Target,
+    /// The search converged (or stalled) and restarts are off ([`Minimizer::restarts`]).
+    Converged,
+}
+
+impl fmt::Display for Stop {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Stop::Budget => "budget spent",
+            Stop::Target => "target reached",
+            Stop::Converged => "converged",
+        })
+    }
+}
+
+/// The search method of a [`Minimizer`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Strategy {
+    /// The default: a Gaussian search distribution with adaptive spread and metric, flat-step
+    /// growth of the spread on plateaus, and restarts from the best point with a doubled
+    /// population. Needs no step size or learning rate.
+    Adaptive,
+    /// The paper's loop: the plateau-free gradient ([`PlateauFreeGradient`], radial sampler,
+    /// antithetic pairs) with `samples` evaluations per estimate, [`Adam`] with learning rate
+    /// `lr`, and [`Annealer::paper`] from `sigma0` over the iterations the budget allows
+    /// (`(budget - 1) / samples`; the last evaluation is at the final parameters).
+    Paper {
+        /// `N`, evaluations of `f` per gradient estimate (even).
+        samples: usize,
+        /// Adam's learning rate.
+        lr: f64,
+        /// The starting spread of the annealer.
+        sigma0: f64,
+    },
+}
+
+/// The metric (covariance) the search distribution learns.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Metric {
+    /// Full up to `n = 200`, diagonal above (the default).
+    #[default]
+    Auto,
+    /// A full covariance: learns rotated, ill-conditioned metrics; `O(n^2)` per evaluation
+    /// and `O(n^3)` per eigendecomposition (every few iterations).
+    Full,
+    /// A diagonal covariance: per-coordinate spreads only, `O(n)` per evaluation (separable
+    /// CMA-ES, Ros and Hansen 2008, positive weights only). For large `n`; slow on rotated,
+    /// ill-conditioned functions.
+    Diagonal,
+}
+
+/// The largest dimension for which [`Metric::Auto`] learns a full covariance.
+pub const FULL_METRIC_MAX_DIM: usize = 200;
+
+/// The result of a [`Minimizer`] run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Minimum {
+    /// The best point seen.
+    pub x: Vec<f64>,
+    /// `f(x)`.
+    pub fun: f64,
+    /// Evaluations of `f` spent (at most the budget).
+    pub evaluations: usize,
+    /// Iterations (generations of the search distribution, or gradient steps of the paper's
+    /// loop).
+    pub iterations: usize,
+    /// Restarts of the search distribution (0 for the paper's loop).
+    pub restarts: usize,
+    /// The spread at the end.
+    pub sigma: f64,
+    /// Why the run ended.
+    pub stop: Stop,
+}
+
+/// `minimize` with options.
+///
+/// ```
+/// use plateau::{Minimizer, Stop};
+///
+/// // An ill-conditioned, rotated quadratic: the metric is learnt from the samples.
+/// let f = |x: &[f64]| (x[0] + x[1] - 1.0).powi(2) + 1e4 * (x[0] - x[1]).powi(2);
+/// let best = Minimizer::new(f)
+///     .budget(3000)
+///     .seed(7)
+///     .target(1e-10)
+///     .run(&[3.0, -2.0])?;
+/// assert_eq!(best.stop, Stop::Target);
+/// assert!((best.x[0] - 0.5).abs() < 1e-4 && (best.x[1] - 0.5).abs() < 1e-4);
+/// # Ok::<(), plateau::Error>(())
+/// ```
+///
+/// # The method
+/// Each iteration draws a population of points from a Gaussian `N(m, sigma^2 C)` around the
+/// mean `m`, ranks them by `f`, and moves `m` along the rank-weighted best offsets: the natural
+/// gradient of the Gaussian-smoothed, rank-transformed objective (a plateau-free gradient that
+/// ignores the scale of `f`). `sigma` follows cumulative step-size adaptation (it shrinks with
+/// progress, with no floor) and grows while the best quarter of a generation ties (a plateau) (a
+/// plateau); `C` learns the function's metric with the CMA-ES rules (Hansen 2016). When a run
+/// converges or stalls, the next run starts from the best point seen with twice the
+/// population. Details, sources and measurements: `docs/convergence.md`.
+///
+/// # Determinism
+/// The result is a function of the objective, `x0`, the options and the seed alone. An
+/// [`Objective`] that takes a seed ([`crate::Seeded`]) receives the same seed for every point
+/// of an iteration (common random numbers), a new one each iteration.
+pub struct Minimizer<F> {
+    objective: F,
+    budget: Option<usize>,
+    seed: u64,
+    sigma0: Option<f64>,
+    bounds: Option<(Vec<f64>, Vec<f64>)>,
+    target: Option<f64>,
+    population: Option<usize>,
+    restarts: bool,
+    mirrored: bool,
+    flat_growth: bool,
+    metric: Metric,
+    restart_from_best: bool,
+    strategy: Strategy,
+}
+
+impl<F> fmt::Debug for Minimizer<F> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Minimizer")
+            .field("budget", &self.budget)
+            .field("seed", &self.seed)
+            .field("sigma0", &self.sigma0)
+            .field("bounds", &self.bounds)
+            .field("target", &self.target)
+            .field("population", &self.population)
+            .field("restarts", &self.restarts)
+            .field("mirrored", &self.mirrored)
+            .field("flat_growth", &self.flat_growth)
+            .field("metric", &self.metric)
+            .field("strategy", &self.strategy)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<F: Objective> Minimizer<F> {
+    /// A minimiser of `objective`: any `Fn(&[f64]) -> f64`, a [`crate::Seeded`] or
+    /// [`crate::Batch`] closure (a batch objective receives a whole iteration's points at
+    /// once), or your own [`Objective`].
+    pub fn new(objective: F) -> Self {
+        Minimizer {
+            objective,
+            budget: None,
+            seed: 0,
+            sigma0: None,
+            bounds: None,
+            target: None,
+            population: None,
+            restarts: true,
+            mirrored: true,
+            flat_growth: true,
+            metric: Metric::Auto,
+            restart_from_best: true,
+            strategy: Strategy::Adaptive,
+        }
+    }
+
+    /// The number of evaluations of `f` the run may spend (default: `1000 n`).
+    pub fn budget(mut self, budget: usize) -> Self {
+        self.budget = Some(budget);
+        self
+    }
+
+    /// The seed of every random choice (default 0).
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+
+    /// The starting spread, in the units of `x` (default: a quarter of the mean box width
+    /// with [`Minimizer::bounds`], else `max(1, max |x0_i|) / 2`). It adapts from there: a
+    /// poor guess costs evaluations, not the result.
+    pub fn sigma0(mut self, sigma0: f64) -> Self {
+        self.sigma0 = Some(sigma0);
+        self
+    }
+
+    /// A box: every evaluated point is projected onto it, and restarts stay inside it.
+    pub fn bounds(mut self, lower: Vec<f64>, upper: Vec<f64>) -> Self {
+        self.bounds = Some((lower, upper));
+        self
+    }
+
+    /// Stop as soon as `f` reaches `target` or below.
+    pub fn target(mut self, target: f64) -> Self {
+        self.target = Some(target);
+        self
+    }
+
+    /// The population of the first run (default `4 + floor(3 ln n)`); each restart doubles it.
+    pub fn population(mut self, population: usize) -> Self {
+        self.population = Some(population);
+        self
+    }
+
+    /// Whether a run that converged or stalled restarts from the best point with a doubled
+    /// population while budget remains (default: yes). Off, the run ends with
+    /// [`Stop::Converged`].
+    pub fn restarts(mut self, restarts: bool) -> Self {
+        self.restarts = restarts;
+        self
+    }
+
+    /// Mirrored (antithetic) draws, `y` and `-y`, as the paper's antithetic pairs (default:
+    /// on; it won on Rastrigin and Rosenbrock, see `docs/convergence.md`).
+    pub fn mirrored(mut self, mirrored: bool) -> Self {
+        self.mirrored = mirrored;
+        self
+    }
+
+    /// Whether the spread grows on generations where half the points tie with the best
+    /// (default: yes; the plateau rule).
+    pub fn flat_growth(mut self, flat_growth: bool) -> Self {
+        self.flat_growth = flat_growth;
+        self
+    }
+
+    /// Whether restarts start from the best point seen (default) or from `x0`.
+    pub fn restart_from_best(mut self, from_best: bool) -> Self {
+        self.restart_from_best = from_best;
+        self
+    }
+
+    /// The metric the search distribution learns (default [`Metric::Auto`]).
+    pub fn metric(mut self, metric: Metric) -> Self {
+        self.metric = metric;
+        self
+    }
+
+    /// The search method; [`Strategy::Paper`] runs the paper's loop (annealer and Adam) with
+    /// the same budget, seed and bounds.
+    pub fn strategy(mut self, strategy: Strategy) -> Self {
+        self.strategy = strategy;
+        self
+    }
+
+    /// The objective.
+    pub fn objective(&self) -> &F {
+        &self.objective
+    }
+
+    fn check(&self, x0: &[f64]) -> Result<usize, Error> {
+        check::theta(x0)?;
+        let n = x0.len();
+        let budget = self.budget.unwrap_or(1000 * n);
+        if budget == 0 {
+            return Err(Error::InvalidParameter {
+                name: "budget",
+                value: 0.0,
+                reason: "must be at least 1 evaluation",
+            });
+        }
+        if let Some(s) = self.sigma0 {
+            check::positive("sigma0", s)?;
+        }
+        if let Some(t) = self.target {
+            if t.is_nan() {
+                return Err(Error::InvalidParameter {
+                    name: "target",
+                    value: t,
+                    reason: "must not be NaN",
+                });
+            }
+        }
+        if let Some(p) = self.population {
+            if p < 2 {
+                return Err(Error::InvalidParameter {
+                    name: "population",
+                    value: p as f64,
+                    reason: "must be at least 2",
+                });
+            }
+        }
+        if let Some((lo, hi)) = &self.bounds {
+            check::len("lower bounds", lo.len(), n)?;
+            check::len("upper bounds", hi.len(), n)?;
+            for (index, (&l, &u)) in lo.iter().zip(hi).enumerate() {
+                if !l.is_finite() || !u.is_finite() || l > u {
+                    return Err(Error::InvalidBounds {
+                        index,
+                        lower: l,
+                        upper: u,
+                    });
+                }
+                if !(l..=u).contains(&x0[index]) {
+                    return Err(Error::InvalidParameter {
+                        name: "x0 (outside the bounds)",
+                        value: x0[index],
+                        reason: "must lie within the bounds",
+                    });
+                }
+            }
+        }
+        if let Strategy::Paper {
+            samples,
+            lr,
+            sigma0,
+        } = self.strategy
+        {
+            if samples == 0 {
+                return Err(Error::ZeroSamples);
+            }
+            if samples % 2 == 1 {
+                return Err(Error::OddSamples(samples));
+            }
+            check::positive("lr", lr)?;
+            check::positive("sigma0", sigma0)?;
+        }
+        Ok(budget)
+    }
+
+    /// Runs from `x0`.
+    ///
+    /// # Errors
+    /// Bad options or start ([`Error::EmptyTheta`], [`Error::NonFiniteTheta`],
+    /// [`Error::InvalidParameter`], [`Error::InvalidBounds`], [`Error::LengthMismatch`]), or
+    /// `f` returning NaN or an infinity ([`Error::NonFiniteValue`], with the point).
+    pub fn run(&self, x0: &[f64]) -> Result<Minimum, Error> {
+        let budget = self.check(x0)?;
+        match self.strategy {
+            Strategy::Adaptive => self.run_adaptive(x0, budget),
+            Strategy::Paper {
+                samples,
+                lr,
+                sigma0,
+            } => self.run_paper(x0, budget, samples, lr, sigma0),
+        }
+    }
+
+    fn run_adaptive(&self, x0: &[f64], budget: usize) -> Result<Minimum, Error> {
+        let n = x0.len();
+        let (sigma0, scales) = match (&self.bounds, self.sigma0) {
+            (Some((lo, hi)), s) => {
+                let widths: Vec<f64> = lo.iter().zip(hi).map(|(l, u)| u - l).collect();
+                let mean = widths.iter().sum::<f64>() / n as f64;
+                if mean > 0.0 {
+                    let scales = widths.iter().map(|w| (w / mean).max(1e-12)).collect();
+                    (s.unwrap_or(0.25 * mean), scales)
+                } else {
+                    (s.unwrap_or(1.0), vec![1.0; n])
+                }
+            }
+            (None, Some(s)) => (s, vec![1.0; n]),
+            (None, None) => {
+                let big = x0.iter().fold(1.0f64, |a, v| a.max(v.abs()));
+                (0.5 * big, vec![1.0; n])
+            }
+        };
+        let mut rng = rng(self.seed);
+        let mut best = Best {
+            x: x0.to_vec(),
+            fun: f64::INFINITY,
+        };
+        let mut evaluations = 0usize;
+        let mut iterations = 0usize;
+        let mut restarts = 0usize;
+        let mut lambda = self.population.unwrap_or_else(|| Params::default_lambda(n));
+        let mut start = x0.to_vec();
+        let mut flat_buf: Vec<f64> = Vec::new();
+        let mut values: Vec<f64> = Vec::new();
+        loop {
+            let full = match self.metric {
+                Metric::Full => true,
+                Metric::Diagonal => false,
+                Metric::Auto => n <= FULL_METRIC_MAX_DIM,
+            };
+            let mut dist = SearchGaussian::new(&start, sigma0, &scales, lambda, full);
+            dist.mirrored = self.mirrored;
+            dist.flat_growth = self.flat_growth;
+            let end = loop {
+                let generation = dist.sample(&mut rng);
+                let mut ys = generation.ys;
+                let count = ys.len().min(budget - evaluations);
+                ys.truncate(count);
+                flat_buf.clear();
+                for y in ys.iter_mut() {
+                    let mut x = dist.point(y);
+                    if let Some((lo, hi)) = &self.bounds {
+                        let mut moved = false;
+                        for i in 0..n {
+                            let c = x[i].clamp(lo[i], hi[i]);
+                            moved |= c != x[i];
+                            x[i] = c;
+                        }
+                        if moved {
+                            *y = (&x - &dist.mean) / dist.sigma;
+                        }
+                    }
+                    flat_buf.extend(x.iter());
+                }
+                if let Some(index) = flat_buf.iter().position(|v| !v.is_finite()) {
+                    return Err(Error::NonFinitePoint {
+                        sample: evaluations + index / n,
+                        index: index % n,
+                        value: flat_buf[index],
+                    });
+                }
+                values.clear();
+                values.resize(count, 0.0);
+                let seeds = vec![
+                    self.seed ^ (iterations as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+                    count
+                ];
+                self.objective
+                    .evaluate_batch(Points::new(&flat_buf, n), &seeds, &mut values);
+                for (k, &v) in values.iter().enumerate() {
+                    let point = &flat_buf[k * n..(k + 1) * n];
+                    if !v.is_finite() {
+                        return Err(Error::NonFiniteValue {
+                            sample: evaluations + k,
+                            value: v,
+                            point: point.to_vec(),
+                        });
+                    }
+                    if v < best.fun {
+                        best.fun = v;
+                        best.x.copy_from_slice(point);
+                    }
+                }
+                evaluations += count;
+                iterations += 1;
+                if self.target.is_some_and(|t| best.fun <= t) {
+                    return Ok(best.finish(
+                        evaluations,
+                        iterations,
+                        restarts,
+                        dist.sigma,
+                        Stop::Target,
+                    ));
+                }
+                if evaluations >= budget || count < dist.p.lambda {
+                    return Ok(best.finish(
+                        evaluations,
+                        iterations,
+                        restarts,
+                        dist.sigma,
+                        Stop::Budget,
+                    ));
+                }
+                if let Some(end) = dist.update(&ys, &values) {
+                    break end;
+                }
+            };
+            if !self.restarts {
+                let _: RunEnd = end; // why the run ended does not change what happens next
+                return Ok(best.finish(
+                    evaluations,
+                    iterations,
+                    restarts,
+                    dist.sigma,
+                    Stop::Converged,
+                ));
+            }
+            restarts += 1;
+            lambda *= 2;
+            if self.restart_from_best {
+                start.clone_from(&best.x);
+            }
+        }
+    }
+
+    fn run_paper(
+        &self,
+        x0: &[f64],
+        budget: usize,
+        samples: usize,
+        lr: f64,
+        sigma0: f64,
+    ) -> Result<Minimum, Error> {
+        let tracked = Tracked {
+            inner: &self.objective,
+            best: RefCell::new(Best {
+                x: x0.to_vec(),
+                fun: f64::INFINITY,
+            }),
+            evaluations: Cell::new(0),
+        };
+        let iterations = (budget - 1) / samples;
+        let mut adam = Adam::new(lr)?;
+        if let Some((lo, hi)) = &self.bounds {
+            adam = adam.bounds(lo.clone(), hi.clone())?;
+        }
+        let mut theta = x0.to_vec();
+        if iterations > 0 {
+            let mut grad = PlateauFreeGradient::new(&tracked)
+                .samples(samples)
+                .seed(self.seed);
+            let mut opt =
+                Optimizer::new(adam, Annealer::paper(sigma0, iterations)?).record_theta(false);
+            let history = opt.minimize(&mut grad, x0)?;
+            if let Some(t) = history.last_theta() {
+                theta = t.to_vec();
+            }
+        }
+        let v = tracked.evaluate(&theta, self.seed);
+        if !v.is_finite() {
+            return Err(Error::NonFiniteValue {
+                sample: tracked.evaluations.get() - 1,
+                value: v,
+                point: theta,
+            });
+        }
+        let evaluations = tracked.evaluations.get();
+        let sigma = if iterations > 0 {
+            Annealer::paper(sigma0, iterations)?.sigma(iterations - 1)
+        } else {
+            sigma0
+        };
+        let best = tracked.best.into_inner();
+        let stop = if self.target.is_some_and(|t| best.fun <= t) {
+            Stop::Target
+        } else {
+            Stop::Budget
+        };
+        Ok(best.finish(evaluations, iterations, 0, sigma, stop))
+    }
+}
+
+struct Best {
+    x: Vec<f64>,
+    fun: f64,
+}
+
+impl Best {
+    fn finish(
+        self,
+        evaluations: usize,
+        iterations: usize,
+        restarts: usize,
+        sigma: f64,
+        stop: Stop,
+    ) -> Minimum {
+        Minimum {
+            x: self.x,
+            fun: self.fun,
+            evaluations,
+            iterations,
+            restarts,
+            sigma,
+            stop,
+        }
+    }
+}
+
+/// An objective by reference that remembers the best point it was evaluated at.
+struct Tracked<'a, F> {
+    inner: &'a F,
+    best: RefCell<Best>,
+    evaluations: Cell<usize>,
+}
+
+impl<F: Objective> Objective for &Tracked<'_, F> {
+    fn evaluate(&self, point: &[f64], seed: u64) -> f64 {
+        let v = self.inner.evaluate(point, seed);
+        self.evaluations.set(self.evaluations.get() + 1);
+        let mut best = self.best.borrow_mut();
+        if v < best.fun {
+            best.fun = v;
+            best.x.copy_from_slice(point);
+        }
+        v
+    }
+}
+
+impl<F: Objective> Tracked<'_, F> {
+    fn evaluate(&self, point: &[f64], seed: u64) -> f64 {
+        Objective::evaluate(&self, point, seed)
+    }
+}

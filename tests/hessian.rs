@@ -1,0 +1,88 @@
+//! `smoothed_hessian` against analytic Gaussian-smoothed Hessians, within stated standard
+//! errors (seeded: the same draws every run).
+
+use plateau::{smoothed_hessian, Error};
+
+/// Every entry within `k` standard errors of the analytic value, and the errors small.
+fn check(est: &plateau::HessianEstimate, exact: &[f64], k: f64, max_se: f64) {
+    for (idx, ((h, se), e)) in est
+        .hessian
+        .iter()
+        .zip(&est.standard_error)
+        .zip(exact)
+        .enumerate()
+    {
+        assert!(
+            (h - e).abs() <= k * se,
+            "entry {idx}: {h} vs exact {e} (se {se})"
+        );
+        assert!(*se < max_se, "entry {idx}: se {se}");
+    }
+}
+
+#[test]
+fn quadratic_hessian_is_exact_in_expectation() {
+    // f = 1/2 x^T A x + b.x + 7: grad^2 Q_sigma = A for every sigma.
+    let a = [[4.0, 1.0, -2.0], [1.0, 3.0, 0.5], [-2.0, 0.5, 1.0]];
+    let f = |x: &[f64]| {
+        let mut q = 7.0 + x[0] - 2.0 * x[2];
+        for i in 0..3 {
+            for j in 0..3 {
+                q += 0.5 * x[i] * a[i][j] * x[j];
+            }
+        }
+        q
+    };
+    let exact: Vec<f64> = a.iter().flatten().copied().collect();
+    for (sigma, seed) in [(0.1, 1), (1.0, 2), (10.0, 3)] {
+        let est = smoothed_hessian(f, &[0.3, -1.0, 2.0], sigma, 20_000, seed).unwrap();
+        assert_eq!(est.evaluations, 40_001);
+        check(&est, &exact, 4.5, 0.2);
+    }
+}
+
+#[test]
+fn cubic_smoothed_hessian() {
+    // f = x0^3 + x0 x1^2: Q_sigma = f + 4 sigma^2 x0 (linear), so grad^2 Q = [[6 x0, 2 x1], [2 x1, 2 x0]].
+    let f = |x: &[f64]| x[0].powi(3) + x[0] * x[1] * x[1];
+    let theta = [0.5, -1.0];
+    let exact = [3.0, -2.0, -2.0, 1.0];
+    let est = smoothed_hessian(f, &theta, 0.3, 20_000, 9).unwrap();
+    check(&est, &exact, 4.5, 0.2);
+}
+
+#[test]
+fn a_steps_smoothed_hessian_is_seen_from_its_plateau() {
+    // f = 1[x > 0]: Q_sigma(x) = Phi(x / sigma), Q'' = -x / sigma^3 phi(x / sigma). At x = -0.3
+    // the plain second derivative is 0 (a plateau); the smoothed one is not.
+    let f = |x: &[f64]| if x[0] > 0.0 { 1.0 } else { 0.0 };
+    let (x, sigma) = (-0.3f64, 0.5f64);
+    let u = x / sigma;
+    let phi = (-0.5 * u * u).exp() / (2.0 * std::f64::consts::PI).sqrt();
+    let exact = -x / sigma.powi(3) * phi;
+    assert!(exact > 0.5);
+    let est = smoothed_hessian(f, &[x], sigma, 50_000, 4).unwrap();
+    check(&est, &[exact], 4.5, 0.1);
+}
+
+#[test]
+fn bad_input_is_an_error() {
+    let f = |x: &[f64]| x[0];
+    assert_eq!(
+        smoothed_hessian(f, &[], 1.0, 10, 0).unwrap_err(),
+        Error::EmptyTheta
+    );
+    assert_eq!(
+        smoothed_hessian(f, &[0.0], 0.0, 10, 0).unwrap_err(),
+        Error::InvalidSigma(0.0)
+    );
+    assert_eq!(
+        smoothed_hessian(f, &[0.0], 1.0, 0, 0).unwrap_err(),
+        Error::ZeroSamples
+    );
+    let nan = |x: &[f64]| if x[0] > 0.0 { f64::NAN } else { 0.0 };
+    assert!(matches!(
+        smoothed_hessian(nan, &[0.0], 1.0, 10, 0).unwrap_err(),
+        Error::NonFiniteValue { .. }
+    ));
+}

@@ -1,0 +1,356 @@
+//! `plateau::minimize` and `Minimizer`: plateaus, the adaptive spread, extremes, bad input.
+
+use std::cell::{Cell, RefCell};
+
+use plateau::{minimize, Error, Metric, Minimizer, Seeded, Stop, Strategy};
+
+/// The staircase: the squared distance of the rounded point to an integer target.
+fn staircase(target: &[f64]) -> impl Fn(&[f64]) -> f64 + '_ {
+    move |x: &[f64]| {
+        x.iter()
+            .zip(target)
+            .map(|(v, t)| (v.round() - t).powi(2))
+            .sum()
+    }
+}
+
+/// A 50-D integer target with squared norm 205: twenty 3s, twenty-five 1s, five 0s, signs mixed.
+fn target_50() -> Vec<f64> {
+    (0..50)
+        .map(|i| {
+            let v = if i < 20 {
+                3.0
+            } else if i < 45 {
+                1.0
+            } else {
+                0.0
+            };
+            if i % 2 == 0 {
+                v
+            } else {
+                -v
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn staircase_3d_is_solved_with_defaults() {
+    let target = [1.0, 2.0, 3.0];
+    let f = staircase(&target);
+    assert_eq!(f(&[0.0; 3]), 14.0);
+    for seed in 0..5 {
+        let best = Minimizer::new(&f)
+            .budget(1600)
+            .seed(seed)
+            .run(&[0.0; 3])
+            .unwrap();
+        assert_eq!(best.fun, 0.0, "seed {seed}: {best:?}");
+        assert_eq!(f(&best.x), 0.0);
+    }
+    // And through the one-line entry point.
+    assert_eq!(minimize(&f, &[0.0; 3], 1600).unwrap().fun, 0.0);
+}
+
+#[test]
+fn staircase_50d_is_solved_with_defaults() {
+    let target = target_50();
+    let f = staircase(&target);
+    assert_eq!(f(&[0.0; 50]), 205.0);
+    for seed in 0..3 {
+        let best = Minimizer::new(&f)
+            .budget(10_000)
+            .seed(seed)
+            .run(&[0.0; 50])
+            .unwrap();
+        assert_eq!(
+            best.fun, 0.0,
+            "seed {seed}: {} after {}",
+            best.fun, best.evaluations
+        );
+    }
+}
+
+#[test]
+fn the_papers_loop_is_one_option_away() {
+    // The settings that solve the 3-D staircase: N = 4, lr 0.05, sigma0 1, 400
+    // iterations (1600 evaluations, plus one at the final parameters).
+    let target = [1.0, 2.0, 3.0];
+    let f = staircase(&target);
+    let paper = Strategy::Paper {
+        samples: 4,
+        lr: 0.05,
+        sigma0: 1.0,
+    };
+    let best = Minimizer::new(&f)
+        .budget(1601)
+        .strategy(paper)
+        .run(&[0.0; 3])
+        .unwrap();
+    assert_eq!(best.iterations, 400);
+    assert_eq!(best.evaluations, 1601);
+    assert_eq!(best.restarts, 0);
+    assert_eq!(best.fun, 0.0, "{best:?}");
+    // An odd N is refused, as by the estimator.
+    let odd = Strategy::Paper {
+        samples: 3,
+        lr: 0.05,
+        sigma0: 1.0,
+    };
+    assert_eq!(
+        Minimizer::new(&f).strategy(odd).run(&[0.0; 3]).unwrap_err(),
+        Error::OddSamples(3)
+    );
+}
+
+#[test]
+fn sigma_grows_on_a_plateau() {
+    // Flat everywhere: every generation ties, the spread grows until the run gives up.
+    let best = Minimizer::new(|_: &[f64]| 1.0)
+        .sigma0(0.1)
+        .restarts(false)
+        .budget(100_000)
+        .run(&[0.0, 0.0])
+        .unwrap();
+    assert_eq!(best.stop, Stop::Converged);
+    assert!(best.sigma > 1e6, "sigma {}", best.sigma);
+    assert!(best.evaluations < 2000, "{}", best.evaluations);
+
+    // A step far from a tiny start spread: without growth the samples never see it.
+    let step = |x: &[f64]| if x[0] + x[1] > 10.0 { 0.0 } else { 1.0 };
+    let best = Minimizer::new(step)
+        .sigma0(1e-3)
+        .budget(2000)
+        .run(&[0.0, 0.0])
+        .unwrap();
+    assert_eq!(best.fun, 0.0, "{best:?}");
+    let stuck = Minimizer::new(step)
+        .sigma0(1e-3)
+        .flat_growth(false)
+        .restarts(false)
+        .budget(2000)
+        .run(&[0.0, 0.0])
+        .unwrap();
+    assert_eq!(stuck.fun, 1.0, "without the plateau rule: {stuck:?}");
+}
+
+#[test]
+fn sigma_shrinks_at_a_quadratic_optimum_with_no_floor() {
+    let f = |x: &[f64]| x.iter().map(|v| (v - 0.25) * (v - 0.25)).sum::<f64>();
+    let best = Minimizer::new(f)
+        .restarts(false)
+        .budget(50_000)
+        .run(&[2.0, -1.0, 0.5])
+        .unwrap();
+    assert_eq!(best.stop, Stop::Converged);
+    assert!(best.sigma < 1e-6, "sigma {}", best.sigma);
+    assert!(best.fun < 1e-14, "{}", best.fun);
+}
+
+#[test]
+fn dimension_one() {
+    let best = minimize(|x: &[f64]| (x[0] - 3.0).powi(2), &[-10.0], 1000).unwrap();
+    assert!((best.x[0] - 3.0).abs() < 1e-6, "{best:?}");
+}
+
+#[test]
+fn large_dimension_uses_a_diagonal_metric() {
+    let n = 1000;
+    let f = |x: &[f64]| x.iter().map(|v| (v - 1.0) * (v - 1.0)).sum::<f64>();
+    let start = vec![0.0; n];
+    let best = Minimizer::new(f).budget(30_000).run(&start).unwrap();
+    assert!(
+        best.fun < 1e-2 * f(&start),
+        "{} from {}",
+        best.fun,
+        f(&start)
+    );
+    assert!(best.evaluations <= 30_000);
+}
+
+#[test]
+fn the_scale_of_f_does_not_matter() {
+    let shape = |x: &[f64]| (x[0] - 1.0).powi(2) + 10.0 * (x[1] + 2.0).powi(2);
+    let plain = Minimizer::new(shape).budget(3000).run(&[0.0, 0.0]).unwrap();
+    let huge = Minimizer::new(|x: &[f64]| 1e300 * shape(x))
+        .budget(3000)
+        .run(&[0.0, 0.0])
+        .unwrap();
+    let tiny = Minimizer::new(|x: &[f64]| 1e-300 * shape(x))
+        .budget(3000)
+        .run(&[0.0, 0.0])
+        .unwrap();
+    // Ranks only: the scale of f changes nothing but when a converged run is declared done.
+    for r in [&plain, &huge, &tiny] {
+        assert!(
+            (r.x[0] - 1.0).abs() < 1e-5 && (r.x[1] + 2.0).abs() < 1e-5,
+            "{r:?}"
+        );
+    }
+}
+
+#[test]
+fn non_finite_values_of_f_are_errors() {
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let calls = Cell::new(0);
+        let f = |x: &[f64]| {
+            calls.set(calls.get() + 1);
+            if calls.get() == 7 {
+                bad
+            } else {
+                x[0] * x[0]
+            }
+        };
+        match minimize(f, &[1.0, 2.0], 100).unwrap_err() {
+            Error::NonFiniteValue {
+                sample,
+                value,
+                point,
+            } => {
+                assert_eq!(sample, 6);
+                assert!(value.is_nan() == bad.is_nan());
+                assert_eq!(point.len(), 2);
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+}
+
+#[test]
+fn bad_input_is_an_error() {
+    let f = |x: &[f64]| x[0];
+    assert_eq!(minimize(f, &[], 10).unwrap_err(), Error::EmptyTheta);
+    assert!(matches!(
+        minimize(f, &[0.0, f64::NAN], 10).unwrap_err(),
+        Error::NonFiniteTheta { index: 1, .. }
+    ));
+    assert!(matches!(
+        minimize(f, &[0.0], 0).unwrap_err(),
+        Error::InvalidParameter { name: "budget", .. }
+    ));
+    assert!(matches!(
+        Minimizer::new(f).sigma0(-1.0).run(&[0.0]).unwrap_err(),
+        Error::InvalidParameter { name: "sigma0", .. }
+    ));
+    assert!(matches!(
+        Minimizer::new(f).population(1).run(&[0.0]).unwrap_err(),
+        Error::InvalidParameter {
+            name: "population",
+            ..
+        }
+    ));
+    assert!(matches!(
+        Minimizer::new(f)
+            .bounds(vec![0.0], vec![1.0, 2.0])
+            .run(&[0.5, 0.5])
+            .unwrap_err(),
+        Error::LengthMismatch { .. }
+    ));
+    assert!(matches!(
+        Minimizer::new(f)
+            .bounds(vec![1.0], vec![0.0])
+            .run(&[0.5])
+            .unwrap_err(),
+        Error::InvalidBounds { index: 0, .. }
+    ));
+    assert!(matches!(
+        Minimizer::new(f)
+            .bounds(vec![0.0], vec![1.0])
+            .run(&[2.0])
+            .unwrap_err(),
+        Error::InvalidParameter { .. }
+    ));
+    assert!(matches!(
+        Minimizer::new(f).target(f64::NAN).run(&[0.0]).unwrap_err(),
+        Error::InvalidParameter { name: "target", .. }
+    ));
+}
+
+#[test]
+fn deterministic_for_a_seed() {
+    let f = |x: &[f64]| x.iter().map(|v| v.abs().floor()).sum::<f64>() + (x[0] - 0.3).abs();
+    let run = |seed| {
+        Minimizer::new(f)
+            .budget(2000)
+            .seed(seed)
+            .run(&[3.0, -4.0, 2.0])
+            .unwrap()
+    };
+    assert_eq!(run(5), run(5));
+    assert_ne!(run(5).x, run(6).x);
+}
+
+#[test]
+fn budget_and_bounds_are_respected() {
+    let calls = Cell::new(0usize);
+    let outside = Cell::new(false);
+    let f = |x: &[f64]| {
+        calls.set(calls.get() + 1);
+        if x.iter().any(|v| !(0.0..=1.0).contains(v)) {
+            outside.set(true);
+        }
+        x.iter().map(|v| (v - 2.0).powi(2)).sum::<f64>()
+    };
+    let best = Minimizer::new(f)
+        .budget(777)
+        .bounds(vec![0.0; 4], vec![1.0; 4])
+        .run(&[0.5; 4])
+        .unwrap();
+    assert_eq!(best.evaluations, 777);
+    assert_eq!(calls.get(), 777);
+    assert_eq!(best.stop, Stop::Budget);
+    assert!(!outside.get());
+    // The optimum of the box is its corner.
+    assert!(best.x.iter().all(|v| (v - 1.0).abs() < 1e-6), "{best:?}");
+}
+
+#[test]
+fn target_stops_the_run() {
+    let best = Minimizer::new(|x: &[f64]| x[0] * x[0] + x[1] * x[1])
+        .target(1e-3)
+        .budget(10_000)
+        .run(&[3.0, 3.0])
+        .unwrap();
+    assert_eq!(best.stop, Stop::Target);
+    assert!(best.fun <= 1e-3 && best.evaluations < 1000, "{best:?}");
+}
+
+#[test]
+fn seeded_objectives_share_a_seed_within_an_iteration() {
+    let seen = RefCell::new(Vec::new());
+    let f = Seeded(|x: &[f64], seed: u64| {
+        seen.borrow_mut().push(seed);
+        x[0] * x[0]
+    });
+    let best = Minimizer::new(f)
+        .population(6)
+        .budget(60)
+        .run(&[1.0])
+        .unwrap();
+    assert_eq!(best.iterations, 10);
+    let seeds = seen.borrow();
+    for chunk in seeds.chunks(6) {
+        assert!(chunk.iter().all(|s| *s == chunk[0]));
+    }
+    assert_ne!(seeds[0], seeds[6]);
+}
+
+#[test]
+fn full_and_diagonal_metrics_both_work() {
+    // Rotated and ill-conditioned: the full metric learns the rotation.
+    let rotated = |x: &[f64]| (x[0] + x[1]).powi(2) + 1e4 * (x[0] - x[1]).powi(2);
+    let full = Minimizer::new(rotated)
+        .metric(Metric::Full)
+        .budget(3000)
+        .run(&[2.0, 1.0])
+        .unwrap();
+    assert!(full.fun < 1e-12, "{full:?}");
+    // Axis-aligned and ill-conditioned: the diagonal metric is enough.
+    let separable = |x: &[f64]| x[0].powi(2) + 1e4 * x[1].powi(2) + 1e2 * x[2].powi(2);
+    let diag = Minimizer::new(separable)
+        .metric(Metric::Diagonal)
+        .budget(3000)
+        .run(&[2.0, 1.0, -1.0])
+        .unwrap();
+    assert!(diag.fun < 1e-12, "{diag:?}");
+}
