@@ -290,10 +290,11 @@ impl Objective for PyObjective {
 /// `x` as a flat vector and its shape; ValueError naming `name` for an empty or non-finite `x`.
 fn to_vector(py: Python<'_>, x: &Bound<'_, PyAny>, name: &str) -> PyResult<(Vec<f64>, Vec<usize>)> {
     let numpy = py.import("numpy")?;
-    let array = numpy.call_method1("ascontiguousarray", (x, "float64"))?;
-    let array = array.cast::<PyArrayDyn<f64>>()?;
-    let shape = array.shape().to_vec();
-    let values = array.to_vec()?;
+    let array = numpy.call_method1("asarray", (x, "float64"))?;
+    let shape = array.cast::<PyUntypedArray>()?.shape().to_vec();
+    // `ascontiguousarray` makes a 0-d array 1-d: the shape is taken before.
+    let array = numpy.call_method1("ascontiguousarray", (array,))?;
+    let values = array.cast::<PyArrayDyn<f64>>()?.to_vec()?;
     if values.is_empty() {
         return Err(PyValueError::new_err(format!(
             "{name} is empty (shape {shape:?}): the objective needs at least one parameter"
@@ -307,7 +308,7 @@ fn to_vector(py: Python<'_>, x: &Bound<'_, PyAny>, name: &str) -> PyResult<(Vec<
         };
         return Err(PyValueError::new_err(format!(
             "{at} = {} is not finite",
-            values[i]
+            py_float(values[i])
         )));
     }
     Ok((values, shape))
@@ -324,14 +325,14 @@ fn to_spread(py: Python<'_>, sigma: &Bound<'_, PyAny>) -> PyResult<Spread> {
         return Ok(Spread::Scalar(sigma.extract()?));
     }
     let numpy = py.import("numpy")?;
-    let array = numpy.call_method1("ascontiguousarray", (sigma, "float64"))?;
-    let array = array.cast::<PyArrayDyn<f64>>()?;
-    let values = array.to_vec()?;
-    if array.ndim() == 0 {
-        Ok(Spread::Scalar(values[0]))
-    } else {
-        Ok(Spread::PerCoordinate(values))
+    let array = numpy.call_method1("asarray", (sigma, "float64"))?;
+    if array.cast::<PyUntypedArray>()?.ndim() == 0 {
+        return Ok(Spread::Scalar(array.extract()?));
     }
+    let array = numpy.call_method1("ascontiguousarray", (array,))?;
+    Ok(Spread::PerCoordinate(
+        array.cast::<PyArrayDyn<f64>>()?.to_vec()?,
+    ))
 }
 
 fn parse_sampling(name: &str) -> PyResult<Sampling> {
@@ -340,7 +341,7 @@ fn parse_sampling(name: &str) -> PyResult<Sampling> {
         "per_coordinate" | "percoordinate" => Ok(Sampling::PerCoordinate),
         "gaussian" => Ok(Sampling::Gaussian),
         _ => Err(PyValueError::new_err(format!(
-            "sampling = {name:?} is not a sampler: use 'radial', 'per_coordinate' or 'gaussian'"
+            "sampling = '{name}' is not a sampler: use 'radial', 'per_coordinate' or 'gaussian'"
         ))),
     }
 }
@@ -363,6 +364,17 @@ fn array_like<'py>(
         Ok(array.into_any())
     } else {
         Ok(array.reshape(shape.to_vec())?.into_any())
+    }
+}
+
+/// A float as Python prints it: `nan`, `inf`, `-inf`, `0.5`, `1.0`.
+fn py_float(v: f64) -> String {
+    if v.is_nan() {
+        "nan".into()
+    } else if v.is_infinite() {
+        if v > 0.0 { "inf" } else { "-inf" }.into()
+    } else {
+        format!("{v:?}")
     }
 }
 
@@ -727,7 +739,7 @@ impl PyAnnealer {
             "cosine" => Schedule::Cosine,
             _ => {
                 return Err(PyValueError::new_err(format!(
-                    "annealer = {schedule:?} is not a schedule: use 'paper', 'constant', 'exponential' or 'cosine'"
+                    "annealer = '{schedule}' is not a schedule: use 'paper', 'constant', 'exponential' or 'cosine'"
                 )))
             }
         };
