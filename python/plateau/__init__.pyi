@@ -2,7 +2,7 @@
 the pure-Python ``minimize``)."""
 
 import enum
-from typing import Any, Callable, Iterable, Literal, Optional, Sequence, SupportsFloat, Tuple, Union
+from typing import Any, Callable, Literal, Optional, Sequence, SupportsFloat, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -11,10 +11,10 @@ __version__: str
 PAPER_SIGMA_MIN: float
 PAPER_WARMUP: float
 
-ArrayLike = npt.ArrayLike
-FloatArray = npt.NDArray[np.float64]
-SamplingName = Union[Literal["radial", "per_coordinate", "gaussian"], "Sampling", str]
-ScheduleName = Literal["paper", "constant", "exponential", "cosine"]
+_ArrayLike = npt.ArrayLike
+_FloatArray = npt.NDArray[np.float64]
+_SamplingName = Union[Literal["radial", "per_coordinate", "gaussian"], "Sampling", str]
+_ScheduleName = Literal["paper", "constant", "exponential", "cosine"]
 
 class Sampling(str, enum.Enum):
     """The sampler of perturbations: ``Radial`` (default, exact in every dimension),
@@ -24,6 +24,7 @@ class Sampling(str, enum.Enum):
     PerCoordinate = "per_coordinate"
     Gaussian = "gaussian"
 
+@final
 class PlateauFreeGradient:
     """The gradient of ``fun`` smoothed by a Gaussian of spread ``sigma`` in parameter space,
     estimated from ``samples`` evaluations of ``fun`` per estimate.
@@ -36,19 +37,19 @@ class PlateauFreeGradient:
     ``fun`` releases the GIL); results are bit-for-bit those of the sequential run.
     """
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         fun: Callable[..., Any],
         samples: int = 2,
-        sampling: SamplingName = "radial",
+        sampling: _SamplingName = "radial",
         antithetic: bool = True,
         seed: int = 0,
         batched: bool = False,
         seeded: bool = False,
         orthogonal: bool = False,
         parallel: bool = False,
-    ) -> None: ...
-    def estimate(self, x: ArrayLike, sigma: Union[float, ArrayLike]) -> FloatArray:
+    ) -> "PlateauFreeGradient": ...
+    def estimate(self, x: _ArrayLike, sigma: Union[float, _ArrayLike]) -> _FloatArray:
         """The gradient of ``fun`` smoothed by N(0, sigma^2 I) at ``x``, shaped like ``x``.
         ``sigma``: a positive float, or one positive spread per element of ``x``."""
     def reset(self) -> None:
@@ -78,19 +79,20 @@ class PlateauFreeGradient:
     def nfev(self) -> int:
         """Evaluations of ``fun`` since construction."""
 
+@final
 class FiniteDifference:
     """Central finite differences of step ``step``: the unsmoothed gradient (zero on a plateau);
     ``2 n`` evaluations per estimate."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         fun: Callable[..., Any],
         step: float = 1e-3,
         seed: int = 0,
         batched: bool = False,
         seeded: bool = False,
-    ) -> None: ...
-    def estimate(self, x: ArrayLike, sigma: Optional[float] = None) -> FloatArray: ...
+    ) -> "FiniteDifference": ...
+    def estimate(self, x: _ArrayLike, sigma: Optional[float] = None) -> _FloatArray: ...
     @property
     def step(self) -> float: ...
     @property
@@ -98,30 +100,32 @@ class FiniteDifference:
     @property
     def nfev(self) -> int: ...
 
+@final
 class Spsa:
     """SPSA: one Rademacher direction per estimate, perturbation size ``sigma``; 2 evaluations."""
 
-    def __init__(
-        self, fun: Callable[..., Any], seed: int = 0, batched: bool = False, seeded: bool = False
-    ) -> None: ...
-    def estimate(self, x: ArrayLike, sigma: float) -> FloatArray: ...
+    def __new__(
+        cls, fun: Callable[..., Any], seed: int = 0, batched: bool = False, seeded: bool = False
+    ) -> "Spsa": ...
+    def estimate(self, x: _ArrayLike, sigma: float) -> _FloatArray: ...
     @property
     def seed(self) -> int: ...
     @property
     def nfev(self) -> int: ...
 
+@final
 class Annealer:
     """The spread sigma per iteration: ``paper`` (sigma0 for ``warmup`` of the run, then linear
     to ``sigma_min``), ``constant``, ``exponential``, ``cosine``."""
 
-    def __init__(
-        self,
-        schedule: ScheduleName = "paper",
+    def __new__(
+        cls,
+        schedule: _ScheduleName = "paper",
         sigma0: float = 0.5,
         sigma_min: float = 0.01,
         iterations: int = 400,
         warmup: float = 0.5,
-    ) -> None: ...
+    ) -> "Annealer": ...
     @staticmethod
     def paper(sigma0: float = 0.5, iterations: int = 400) -> "Annealer": ...
     @staticmethod
@@ -131,7 +135,7 @@ class Annealer:
     @staticmethod
     def cosine(sigma0: float = 0.5, sigma_min: float = 0.01, iterations: int = 400) -> "Annealer": ...
     def sigma(self, iteration: int) -> float: ...
-    def sigmas(self) -> FloatArray: ...
+    def sigmas(self) -> _FloatArray: ...
     @property
     def sigma0(self) -> float: ...
     @property
@@ -143,18 +147,19 @@ class Annealer:
     @property
     def warmup(self) -> Optional[float]: ...
 
+@final
 class Adam:
     """Adam with bias correction; ``bounds=(lower, upper)`` projects x after every step."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         lr: float = 0.02,
         beta1: float = 0.9,
         beta2: float = 0.999,
         epsilon: float = 1e-8,
         bounds: Optional[Tuple[Sequence[float], Sequence[float]]] = None,
-    ) -> None: ...
-    def step(self, x: ArrayLike, gradient: ArrayLike) -> FloatArray:
+    ) -> "Adam": ...
+    def step(self, x: _ArrayLike, gradient: _ArrayLike) -> _FloatArray:
         """One step downhill; returns the new x."""
     def reset(self) -> None: ...
     @property
@@ -162,30 +167,30 @@ class Adam:
     @property
     def steps(self) -> int: ...
     @property
-    def bounds(self) -> Optional[Tuple[FloatArray, FloatArray]]: ...
+    def bounds(self) -> Optional[Tuple[_FloatArray, _FloatArray]]: ...
 
 class History:
     """Per-iteration records of a run (arrays of length ``nit``)."""
 
-    sigma: FloatArray
-    grad_norm: FloatArray
-    fun: FloatArray
+    sigma: _FloatArray
+    grad_norm: _FloatArray
+    fun: _FloatArray
     nfev: npt.NDArray[np.uint64]
-    x: Optional[FloatArray]
+    x: Optional[_FloatArray]
     def __init__(
         self,
-        sigma: FloatArray,
-        grad_norm: FloatArray,
-        fun: FloatArray,
+        sigma: _FloatArray,
+        grad_norm: _FloatArray,
+        fun: _FloatArray,
         nfev: npt.NDArray[np.uint64],
-        x: Optional[FloatArray] = None,
+        x: Optional[_FloatArray] = None,
     ) -> None: ...
     def __len__(self) -> int: ...
 
 class OptimizeResult(dict[str, Any]):
     """The fields of ``scipy.optimize.OptimizeResult``, and ``history``."""
 
-    x: FloatArray
+    x: _FloatArray
     fun: float
     nit: int
     nfev: int
@@ -195,7 +200,7 @@ class OptimizeResult(dict[str, Any]):
     history: History
     def __getattr__(self, name: str) -> Any: ...
 
-Bounds = Union[
+_Bounds = Union[
     Sequence[Tuple[Optional[SupportsFloat], Optional[SupportsFloat]]],
     Tuple[Optional[SupportsFloat], Optional[SupportsFloat]],
     Any,
@@ -203,17 +208,17 @@ Bounds = Union[
 
 def minimize(
     fun: Callable[..., Any],
-    x0: ArrayLike,
+    x0: _ArrayLike,
     *,
     sigma0: float = 0.5,
     iterations: Optional[int] = None,
     lr: float = 0.02,
     samples: int = 2,
-    sampling: SamplingName = "radial",
+    sampling: _SamplingName = "radial",
     antithetic: bool = True,
     seed: int = 0,
-    bounds: Optional[Bounds] = None,
-    annealer: Union[ScheduleName, Annealer] = "paper",
+    bounds: Optional[_Bounds] = None,
+    annealer: Union[_ScheduleName, Annealer] = "paper",
     sigma_min: float = 0.01,
     batched: bool = False,
     seeded: bool = False,
@@ -228,4 +233,16 @@ def minimize(
 ) -> OptimizeResult:
     """Minimise ``fun`` from ``x0`` with the plateau-free gradient, Adam and an annealed sigma."""
 
-__all__: list[str]
+__all__ = [
+    "PAPER_SIGMA_MIN",
+    "PAPER_WARMUP",
+    "Adam",
+    "Annealer",
+    "FiniteDifference",
+    "History",
+    "OptimizeResult",
+    "PlateauFreeGradient",
+    "Sampling",
+    "Spsa",
+    "minimize",
+]
