@@ -89,6 +89,46 @@ impl Adam {
         self.t as usize
     }
 
+    /// The moment estimates and the step count: what a saved run needs to continue with the
+    /// same steps (see [`crate::OptimizerState`]).
+    ///
+    /// ```
+    /// use plateau::Adam;
+    /// let mut adam = Adam::new(0.1)?;
+    /// let mut theta = vec![1.0, 2.0];
+    /// adam.step(&mut theta, &[1.0, -1.0])?;
+    /// let saved = adam.moments();
+    /// let mut copy = Adam::new(0.1)?;
+    /// copy.set_moments(saved)?;
+    /// let (mut a, mut b) = (theta.clone(), theta);
+    /// adam.step(&mut a, &[0.5, 0.5])?;
+    /// copy.step(&mut b, &[0.5, 0.5])?;
+    /// assert_eq!(a, b);
+    /// # Ok::<(), plateau::Error>(())
+    /// ```
+    #[must_use]
+    pub fn moments(&self) -> AdamMoments {
+        AdamMoments {
+            m: self.m.clone(),
+            v: self.v.clone(),
+            steps: self.t as u64,
+        }
+    }
+
+    /// Replaces the moment estimates and the step count by saved ones.
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] for moments of different lengths, a non-finite moment, a
+    /// negative second-moment root, a step count above `i32::MAX`, or moments without a step
+    /// (or steps without moments). The optimiser is unchanged on error.
+    pub fn set_moments(&mut self, moments: AdamMoments) -> Result<(), Error> {
+        moments.validate()?;
+        self.m = moments.m;
+        self.v = moments.v;
+        self.t = moments.steps as i32;
+        Ok(())
+    }
+
     /// Forgets the moment estimates (the next step is a first step again).
     pub fn reset(&mut self) {
         self.m.clear();
@@ -138,6 +178,55 @@ impl Adam {
             for ((x, lo), hi) in theta.iter_mut().zip(lower).zip(upper) {
                 *x = x.clamp(*lo, *hi);
             }
+        }
+        Ok(())
+    }
+}
+
+/// Adam's state between steps: the first moment `m`, the root of the second moment `v` (kept
+/// as a root so that huge gradients do not overflow it) and the number of steps taken.
+/// Empty vectors and zero steps before the first step.
+#[derive(Debug, Clone, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct AdamMoments {
+    /// The first moment estimate, one per coordinate.
+    pub m: Vec<f64>,
+    /// The root of the second moment estimate, one per coordinate (never negative).
+    pub v: Vec<f64>,
+    /// Steps taken.
+    pub steps: u64,
+}
+
+impl AdamMoments {
+    /// The rules [`Adam::set_moments`] enforces.
+    pub(crate) fn validate(&self) -> Result<(), Error> {
+        let bad = |field: &'static str, reason: String| Err(Error::InvalidState { field, reason });
+        if self.m.len() != self.v.len() {
+            return bad(
+                "adam.v",
+                format!("has length {}, m has {}", self.v.len(), self.m.len()),
+            );
+        }
+        if self.steps > i32::MAX as u64 {
+            return bad(
+                "adam.steps",
+                format!("= {} exceeds {}", self.steps, i32::MAX),
+            );
+        }
+        if (self.steps == 0) != self.m.is_empty() {
+            return bad(
+                "adam.steps",
+                format!("= {} with {} moments", self.steps, self.m.len()),
+            );
+        }
+        if let Some(i) = self.m.iter().position(|x| !x.is_finite()) {
+            return bad("adam.m", format!("[{i}] = {:e} is not finite", self.m[i]));
+        }
+        if let Some(i) = self.v.iter().position(|x| !(x.is_finite() && *x >= 0.0)) {
+            return bad(
+                "adam.v",
+                format!("[{i}] = {:e} is not finite and >= 0", self.v[i]),
+            );
         }
         Ok(())
     }

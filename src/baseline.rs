@@ -58,6 +58,14 @@ impl<F: Objective> FiniteDifference<F> {
 }
 
 impl<F: Objective> GradientEstimator for FiniteDifference<F> {
+    fn stream_position(&self) -> Option<u64> {
+        Some(self.estimates)
+    }
+
+    fn set_stream_position(&mut self, position: u64) {
+        self.estimates = position;
+    }
+
     fn estimate(&mut self, theta: &[f64], _sigma: f64) -> Result<Estimate, Error> {
         check::theta(theta)?;
         let n = theta.len();
@@ -131,6 +139,14 @@ impl<F: Objective> Spsa<F> {
 }
 
 impl<F: Objective> GradientEstimator for Spsa<F> {
+    fn stream_position(&self) -> Option<u64> {
+        Some(self.estimates)
+    }
+
+    fn set_stream_position(&mut self, position: u64) {
+        self.estimates = position;
+    }
+
     fn estimate(&mut self, theta: &[f64], sigma: f64) -> Result<Estimate, Error> {
         check::sigma(sigma)?;
         check::theta(theta)?;

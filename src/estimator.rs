@@ -30,6 +30,20 @@ pub struct Estimate {
 pub trait GradientEstimator {
     /// Estimates the gradient at `theta` for the spread `sigma`.
     fn estimate(&mut self, theta: &[f64], sigma: f64) -> Result<Estimate, Error>;
+
+    /// Where the estimator's random streams stand: the number of estimates drawn so far, or
+    /// `None` for an estimator without seeded streams (the default). A saved
+    /// [`crate::OptimizerState`] records it so that a resumed run draws what the
+    /// uninterrupted run would have drawn.
+    fn stream_position(&self) -> Option<u64> {
+        None
+    }
+
+    /// Moves the random streams to `position` (the next estimate is estimate `position`).
+    /// The default does nothing, matching a `stream_position` of `None`.
+    fn set_stream_position(&mut self, position: u64) {
+        let _ = position;
+    }
 }
 
 type Evaluator<F> = fn(&F, Points<'_>, &[u64], &mut [f64]);
@@ -384,6 +398,14 @@ impl<F: Objective + Sync> PlateauFreeGradient<F> {
 impl<F: Objective> GradientEstimator for PlateauFreeGradient<F> {
     fn estimate(&mut self, theta: &[f64], sigma: f64) -> Result<Estimate, Error> {
         PlateauFreeGradient::estimate(self, theta, sigma)
+    }
+
+    fn stream_position(&self) -> Option<u64> {
+        Some(self.estimates)
+    }
+
+    fn set_stream_position(&mut self, position: u64) {
+        self.estimates = position;
     }
 }
 

@@ -72,12 +72,12 @@ mod optimize;
 mod sampling;
 pub mod seeding;
 
-pub use adam::Adam;
+pub use adam::{Adam, AdamMoments};
 pub use anneal::{Annealer, Schedule, PAPER_SIGMA_MIN, PAPER_WARMUP};
 pub use error::Error;
 pub use estimator::{Estimate, GradientEstimator, PlateauFreeGradient};
 pub use objective::{Batch, Objective, Points, Seeded};
-pub use optimize::{History, Optimizer, Step};
+pub use optimize::{History, Optimizer, OptimizerState, RunError, Step};
 pub use sampling::Sampling;
 
 /// The README's examples, compiled and run as doctests so that they stay true.

@@ -42,7 +42,7 @@ fn non_finite_theta() {
         check(est.estimate(&theta, 1.0).unwrap_err());
         check(est.estimate_with_spreads(&theta, &[1.0; 4]).unwrap_err());
         let mut opt = Optimizer::new(Adam::new(0.1).unwrap(), Annealer::paper(0.5, 3).unwrap());
-        check(opt.minimize(&mut est, &theta).unwrap_err());
+        check(opt.minimize(&mut est, &theta).unwrap_err().error);
         check(
             FiniteDifference::new(linear, 1e-3)
                 .unwrap()
@@ -212,7 +212,10 @@ fn objective_returning_nan_or_infinity_names_the_point() {
             }
             let text = err.to_string();
             assert!(text.contains(&format!("evaluation {first_bad}")), "{text}");
-            assert!(text.contains(&format!("{}", seen[first_bad][0])), "{text}");
+            assert!(
+                text.contains(&format!("{:e}", seen[first_bad][0])),
+                "{text}"
+            );
         }
     }
 }
@@ -274,9 +277,14 @@ fn the_loop_stops_at_the_first_bad_value() {
     );
     let err = opt.minimize(&mut est, &[0.0]).unwrap_err();
     assert!(
-        matches!(err, Error::NonFiniteValue { ref point, .. } if point[0] < -0.5),
+        matches!(err.error, Error::NonFiniteValue { ref point, .. } if point[0] < -0.5),
         "{err:?}"
     );
+    // The good iterations are kept, and the state continues from the last good point.
+    let kept = err.history().iterations();
+    assert!(kept > 0 && kept < 100, "{kept}");
+    assert_eq!(err.state.iteration, kept);
+    assert_eq!(err.history().last_theta(), Some(&err.state.theta[..]));
 }
 
 #[test]
