@@ -90,6 +90,7 @@ impl<F: Objective> GradientEstimator for FiniteDifference<F> {
         }
         check::gradient(&gradient)?;
         Ok(Estimate {
+            resampled: 0,
             gradient,
             evaluations: 2 * n,
             mean_value,
@@ -172,6 +173,7 @@ impl<F: Objective> GradientEstimator for Spsa<F> {
         let gradient: Vec<f64> = delta.iter().map(|d| half_diff / (sigma * d)).collect();
         check::gradient(&gradient)?;
         Ok(Estimate {
+            resampled: 0,
             gradient,
             evaluations: 2,
             mean_value: 0.5 * values[0] + 0.5 * values[1],

@@ -75,7 +75,7 @@ pub mod seeding;
 pub use adam::{Adam, AdamMoments};
 pub use anneal::{Annealer, Schedule, PAPER_SIGMA_MIN, PAPER_WARMUP};
 pub use error::Error;
-pub use estimator::{Estimate, GradientEstimator, PlateauFreeGradient};
+pub use estimator::{Estimate, GradientEstimator, OnFailure, PlateauFreeGradient};
 pub use objective::{Batch, Objective, Points, Seeded};
 pub use optimize::{History, Optimizer, OptimizerState, RunError, Step};
 pub use sampling::Sampling;
