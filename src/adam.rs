@@ -108,6 +108,11 @@ impl Adam {
     /// ```
     #[must_use]
     pub fn moments(&self) -> AdamMoments {
+        if self.t == 0 {
+            // Before the first step (or after a refused first step, which sized them) the
+            // moments are zero, and an empty state says so.
+            return AdamMoments::default();
+        }
         AdamMoments {
             m: self.m.clone(),
             v: self.v.clone(),
@@ -141,8 +146,9 @@ impl Adam {
     ///
     /// # Errors
     /// `gradient` or the bounds of a different length than `theta`, a non-finite gradient
-    /// coordinate, or a `theta` whose length changed since the first step. On error `theta`
-    /// and the optimiser's state are unchanged.
+    /// coordinate, a `theta` whose length changed since the first step, or a step that would
+    /// overflow a coordinate ([`Error::StepOverflow`]). On error `theta` and the optimiser's
+    /// state are unchanged.
     pub fn step(&mut self, theta: &mut [f64], gradient: &[f64]) -> Result<(), Error> {
         let n = theta.len();
         check::len("gradient", gradient.len(), n)?;
@@ -151,34 +157,56 @@ impl Adam {
         }
         check::gradient(gradient)?;
         if self.t == 0 {
+            // Zero moments are the first step's; sized here (and kept on error: they are
+            // still zero).
             self.m = vec![0.0; n];
             self.v = vec![0.0; n];
         } else {
             check::len("theta (since the first step)", n, self.m.len())?;
         }
-        self.t = self.t.saturating_add(1);
-        let correct1 = 1.0 - self.beta1.powi(self.t);
-        let correct2_sqrt = (1.0 - self.beta2.powi(self.t)).sqrt();
+        let t = self.t.saturating_add(1);
+        let correct1 = 1.0 - self.beta1.powi(t);
+        let correct2_sqrt = (1.0 - self.beta2.powi(t)).sqrt();
         let (sqrt_beta2, sqrt_one_minus_beta2) = (self.beta2.sqrt(), (1.0 - self.beta2).sqrt());
-        for i in 0..n {
+        let (beta1, lr, epsilon) = (self.beta1, self.lr, self.epsilon);
+        let bounds = self.bounds.as_ref();
+        // Coordinate i's new first moment, second-moment root and parameter.
+        let update = |i: usize, m: f64, v: f64, x: f64| {
             let g = gradient[i];
-            self.m[i] = self.beta1 * self.m[i] + (1.0 - self.beta1) * g;
+            let m = beta1 * m + (1.0 - beta1) * g;
             // `v` holds the root of the second moment: g^2 overflows for |g| > 1e154, its
             // root never does, and the hypotenuse is only needed when the values are huge.
-            let (a, b) = (sqrt_beta2 * self.v[i], sqrt_one_minus_beta2 * g.abs());
-            self.v[i] = if a.max(b) < 1e150 {
+            let (a, b) = (sqrt_beta2 * v, sqrt_one_minus_beta2 * g.abs());
+            let v = if a.max(b) < 1e150 {
                 (a * a + b * b).sqrt()
             } else {
                 a.hypot(b)
             };
-            let m_hat = self.m[i] / correct1;
-            theta[i] -= self.lr * m_hat / (self.v[i] / correct2_sqrt + self.epsilon);
-        }
-        if let Some((lower, upper)) = &self.bounds {
-            for ((x, lo), hi) in theta.iter_mut().zip(lower).zip(upper) {
-                *x = x.clamp(*lo, *hi);
+            let mut x = x - lr * (m / correct1) / (v / correct2_sqrt + epsilon);
+            if let Some((lower, upper)) = bounds {
+                x = x.clamp(lower[i], upper[i]);
+            }
+            (m, v, x)
+        };
+        // A step that would carry a coordinate past f64::MAX (a huge lr, or theta already
+        // near the end of the range) is refused before anything is written, so that the
+        // error leaves theta and the moments as they were.
+        let current = self.m.iter().zip(&self.v).zip(theta.iter());
+        for (i, ((&m, &v), &x)) in current.enumerate() {
+            let (_, _, next) = update(i, m, v, x);
+            if !next.is_finite() {
+                return Err(Error::StepOverflow {
+                    index: i,
+                    theta: x,
+                    value: next,
+                });
             }
         }
+        let current = self.m.iter_mut().zip(&mut self.v).zip(theta.iter_mut());
+        for (i, ((m, v), x)) in current.enumerate() {
+            (*m, *v, *x) = update(i, *m, *v, *x);
+        }
+        self.t = t;
         Ok(())
     }
 }

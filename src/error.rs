@@ -115,6 +115,18 @@ pub enum Error {
         allowed: &'static str,
     },
 
+    /// An Adam step would carry a coordinate of theta past the largest finite number (a
+    /// learning rate too large for theta's scale). Nothing was changed.
+    #[error("the step would overflow theta[{index}] = {theta:e} to {value:e}; reduce lr")]
+    StepOverflow {
+        /// The coordinate.
+        index: usize,
+        /// Its value before the step.
+        theta: f64,
+        /// The non-finite value the step would give.
+        value: f64,
+    },
+
     /// A saved optimiser state that cannot be continued from (see
     /// [`crate::Optimizer::minimize_from`]): a dimension that does not match, a NaN, a
     /// history of the wrong length. Nothing of the state was used.

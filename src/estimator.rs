@@ -480,7 +480,7 @@ impl<F: Objective> PlateauFreeGradient<F> {
                 },
             }
             let gradient = accumulate(&settings, spreads, first, b)?;
-            let mean_value = b.values.iter().map(|v| v / settings.samples as f64).sum();
+            let mean_value = mean(&b.values);
             return Ok(Estimate {
                 gradient,
                 evaluations: settings.samples * (resampled + 1),
@@ -489,6 +489,19 @@ impl<F: Objective> PlateauFreeGradient<F> {
             });
         }
     }
+}
+
+/// The mean of finite values, itself always finite. Summing the shares `v / N` is the
+/// usual form (and gives the usual bits); for values near `+-f64::MAX` the sum of the shares
+/// can round past the largest finite number, and in units of the largest value it cannot.
+pub(crate) fn mean(values: &[f64]) -> f64 {
+    let n = values.len() as f64;
+    let plain: f64 = values.iter().map(|v| v / n).sum();
+    if plain.is_finite() {
+        return plain;
+    }
+    let scale = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    values.iter().map(|v| v / scale).sum::<f64>() / n * scale
 }
 
 /// A panic's message, cut to 200 characters (a payload that is not text is named as such).
