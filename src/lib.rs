@@ -30,6 +30,10 @@
 //!   cosine ones.
 //! - [`Adam`]: with optional box bounds.
 //! - [`Optimizer`]: the loop, with an observer and a [`History`].
+//! - [`OptimizerState`]: a run's state as a value, to save and continue from
+//!   ([`Optimizer::minimize_from`]); an error mid-run returns it with the history so far
+//!   ([`RunError`]). A failing objective is reported, resampled ([`OnFailure`]) or, with
+//!   [`PlateauFreeGradient::catch_panics`], caught; see `docs/reliability.md`.
 //! - [`baseline`]: finite differences and SPSA, for comparison on the same loop.
 //! - [`kernel`]: the Gaussian kernel, the inverse CDF of its derivative, `c_n`.
 //! - [`seeding`]: how every random stream is seeded (SplitMix64 of the seed, the estimate's
