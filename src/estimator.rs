@@ -34,6 +34,25 @@ pub struct Estimate {
     pub resampled: usize,
 }
 
+impl Estimate {
+    /// An estimate that needed no redraws: for a [`GradientEstimator`] of your own, so that
+    /// it keeps compiling when `Estimate` gains fields.
+    ///
+    /// ```
+    /// let e = plateau::Estimate::new(vec![1.0, -2.0], 4, 0.5);
+    /// assert_eq!((e.evaluations, e.resampled), (4, 0));
+    /// ```
+    #[must_use]
+    pub fn new(gradient: Vec<f64>, evaluations: usize, mean_value: f64) -> Self {
+        Estimate {
+            gradient,
+            evaluations,
+            mean_value,
+            resampled: 0,
+        }
+    }
+}
+
 /// What an estimate does when `f` returns NaN or an infinity.
 ///
 /// ```
