@@ -266,13 +266,13 @@ impl Optimizer {
     ///
     /// # Errors
     /// Whatever the estimator or Adam report (bad input, non-finite values of `f`); the run
-    /// stops at the first error, which comes with the history so far and the state to
-    /// continue from ([`RunError`]).
+    /// stops at the first error. To keep the history of the good iterations and the state
+    /// to continue from, use [`Optimizer::run`].
     pub fn minimize<G: GradientEstimator + ?Sized>(
         &mut self,
         estimator: &mut G,
         start: &[f64],
-    ) -> Result<History, RunError> {
+    ) -> Result<History, Error> {
         self.minimize_with(estimator, start, |_| ControlFlow::Continue(()))
     }
 
@@ -281,8 +281,42 @@ impl Optimizer {
     /// the estimator's streams continue from where they are.
     ///
     /// # Errors
-    /// As [`Optimizer::minimize`].
+    /// As [`Optimizer::minimize`]: the error alone ([`Optimizer::run`] keeps the rest).
     pub fn minimize_with<G, O>(
+        &mut self,
+        estimator: &mut G,
+        start: &[f64],
+        observer: O,
+    ) -> Result<History, Error>
+    where
+        G: GradientEstimator + ?Sized,
+        O: FnMut(&Step<'_>) -> ControlFlow<()>,
+    {
+        self.run(estimator, start, observer).map_err(Error::from)
+    }
+
+    /// [`Optimizer::minimize_with`], keeping what the run has on error: a [`RunError`]
+    /// carries the error, the history of the good iterations and the state to continue from
+    /// ([`Optimizer::minimize_from`]).
+    ///
+    /// ```
+    /// use std::ops::ControlFlow;
+    /// use plateau::{Adam, Annealer, Error, Optimizer, PlateauFreeGradient};
+    ///
+    /// // f fails once theta has moved below -0.5.
+    /// let f = |x: &[f64]| if x[0] < -0.5 { f64::NAN } else { x[0] };
+    /// let mut grad = PlateauFreeGradient::new(f).samples(4);
+    /// let mut opt = Optimizer::new(Adam::new(0.1)?, Annealer::constant(0.01, 100)?);
+    /// let err = opt.run(&mut grad, &[0.0], |_| ControlFlow::Continue(())).unwrap_err();
+    /// assert!(matches!(err.error, Error::NonFiniteValue { .. }));
+    /// let kept = err.history().iterations();
+    /// assert!(kept > 0 && err.history().last_theta().unwrap()[0] >= -0.5 - 0.2);
+    /// # Ok::<(), plateau::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`Optimizer::minimize`], with the history and the state.
+    pub fn run<G, O>(
         &mut self,
         estimator: &mut G,
         start: &[f64],

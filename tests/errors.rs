@@ -42,7 +42,7 @@ fn non_finite_theta() {
         check(est.estimate(&theta, 1.0).unwrap_err());
         check(est.estimate_with_spreads(&theta, &[1.0; 4]).unwrap_err());
         let mut opt = Optimizer::new(Adam::new(0.1).unwrap(), Annealer::paper(0.5, 3).unwrap());
-        check(opt.minimize(&mut est, &theta).unwrap_err().error);
+        check(opt.minimize(&mut est, &theta).unwrap_err());
         check(
             FiniteDifference::new(linear, 1e-3)
                 .unwrap()
@@ -275,7 +275,9 @@ fn the_loop_stops_at_the_first_bad_value() {
         Adam::new(0.1).unwrap(),
         Annealer::constant(0.01, 100).unwrap(),
     );
-    let err = opt.minimize(&mut est, &[0.0]).unwrap_err();
+    let err = opt
+        .run(&mut est, &[0.0], |_| std::ops::ControlFlow::Continue(()))
+        .unwrap_err();
     assert!(
         matches!(err.error, Error::NonFiniteValue { ref point, .. } if point[0] < -0.5),
         "{err:?}"

@@ -175,7 +175,9 @@ fn a_panic_mid_run_keeps_the_state_and_the_run_resumes_bit_identical() {
         .samples(8)
         .seed(3)
         .catch_panics(true);
-    let err = opt().minimize(&mut grad, &[1.0, 1.0]).unwrap_err();
+    let err = opt()
+        .run(&mut grad, &[1.0, 1.0], |_| ControlFlow::Continue(()))
+        .unwrap_err();
     assert!(
         matches!(err.error, Error::ObjectivePanicked { estimate: 7, .. }),
         "{err}"

@@ -264,7 +264,7 @@ proptest! {
             prop_assert!(h.theta.iter().all(|t| all_finite(t)));
             Ok(())
         };
-        match opt.minimize(&mut *est, &start) {
+        match opt.run(&mut *est, &start, |_| ControlFlow::Continue(())) {
             Ok(h) => {
                 check(&h)?;
                 prop_assert_eq!(h.iterations(), iterations);
