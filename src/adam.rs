@@ -89,6 +89,51 @@ impl Adam {
         self.t as usize
     }
 
+    /// The moment estimates and the step count: what a saved run needs to continue with the
+    /// same steps (see [`crate::OptimizerState`]).
+    ///
+    /// ```
+    /// use plateau::Adam;
+    /// let mut adam = Adam::new(0.1)?;
+    /// let mut theta = vec![1.0, 2.0];
+    /// adam.step(&mut theta, &[1.0, -1.0])?;
+    /// let saved = adam.moments();
+    /// let mut copy = Adam::new(0.1)?;
+    /// copy.set_moments(saved)?;
+    /// let (mut a, mut b) = (theta.clone(), theta);
+    /// adam.step(&mut a, &[0.5, 0.5])?;
+    /// copy.step(&mut b, &[0.5, 0.5])?;
+    /// assert_eq!(a, b);
+    /// # Ok::<(), plateau::Error>(())
+    /// ```
+    #[must_use]
+    pub fn moments(&self) -> AdamMoments {
+        if self.t == 0 {
+            // Before the first step (or after a refused first step, which sized them) the
+            // moments are zero, and an empty state says so.
+            return AdamMoments::default();
+        }
+        AdamMoments {
+            m: self.m.clone(),
+            v: self.v.clone(),
+            steps: self.t as u64,
+        }
+    }
+
+    /// Replaces the moment estimates and the step count by saved ones.
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] for moments of different lengths, a non-finite moment, a
+    /// negative second-moment root, a step count above `i32::MAX`, or moments without a step
+    /// (or steps without moments). The optimiser is unchanged on error.
+    pub fn set_moments(&mut self, moments: AdamMoments) -> Result<(), Error> {
+        moments.validate()?;
+        self.m = moments.m;
+        self.v = moments.v;
+        self.t = moments.steps as i32;
+        Ok(())
+    }
+
     /// Forgets the moment estimates (the next step is a first step again).
     pub fn reset(&mut self) {
         self.m.clear();
@@ -101,8 +146,9 @@ impl Adam {
     ///
     /// # Errors
     /// `gradient` or the bounds of a different length than `theta`, a non-finite gradient
-    /// coordinate, or a `theta` whose length changed since the first step. On error `theta`
-    /// and the optimiser's state are unchanged.
+    /// coordinate, a `theta` whose length changed since the first step, or a step that would
+    /// overflow a coordinate ([`Error::StepOverflow`]). On error `theta` and the optimiser's
+    /// state are unchanged.
     pub fn step(&mut self, theta: &mut [f64], gradient: &[f64]) -> Result<(), Error> {
         let n = theta.len();
         check::len("gradient", gradient.len(), n)?;
@@ -111,33 +157,104 @@ impl Adam {
         }
         check::gradient(gradient)?;
         if self.t == 0 {
+            // Zero moments are the first step's; sized here (and kept on error: they are
+            // still zero).
             self.m = vec![0.0; n];
             self.v = vec![0.0; n];
         } else {
             check::len("theta (since the first step)", n, self.m.len())?;
         }
-        self.t = self.t.saturating_add(1);
-        let correct1 = 1.0 - self.beta1.powi(self.t);
-        let correct2_sqrt = (1.0 - self.beta2.powi(self.t)).sqrt();
+        let t = self.t.saturating_add(1);
+        let correct1 = 1.0 - self.beta1.powi(t);
+        let correct2_sqrt = (1.0 - self.beta2.powi(t)).sqrt();
         let (sqrt_beta2, sqrt_one_minus_beta2) = (self.beta2.sqrt(), (1.0 - self.beta2).sqrt());
-        for i in 0..n {
+        let (beta1, lr, epsilon) = (self.beta1, self.lr, self.epsilon);
+        let bounds = self.bounds.as_ref();
+        // Coordinate i's new first moment, second-moment root and parameter.
+        let update = |i: usize, m: f64, v: f64, x: f64| {
             let g = gradient[i];
-            self.m[i] = self.beta1 * self.m[i] + (1.0 - self.beta1) * g;
+            let m = beta1 * m + (1.0 - beta1) * g;
             // `v` holds the root of the second moment: g^2 overflows for |g| > 1e154, its
             // root never does, and the hypotenuse is only needed when the values are huge.
-            let (a, b) = (sqrt_beta2 * self.v[i], sqrt_one_minus_beta2 * g.abs());
-            self.v[i] = if a.max(b) < 1e150 {
+            let (a, b) = (sqrt_beta2 * v, sqrt_one_minus_beta2 * g.abs());
+            let v = if a.max(b) < 1e150 {
                 (a * a + b * b).sqrt()
             } else {
                 a.hypot(b)
             };
-            let m_hat = self.m[i] / correct1;
-            theta[i] -= self.lr * m_hat / (self.v[i] / correct2_sqrt + self.epsilon);
-        }
-        if let Some((lower, upper)) = &self.bounds {
-            for ((x, lo), hi) in theta.iter_mut().zip(lower).zip(upper) {
-                *x = x.clamp(*lo, *hi);
+            let mut x = x - lr * (m / correct1) / (v / correct2_sqrt + epsilon);
+            if let Some((lower, upper)) = bounds {
+                x = x.clamp(lower[i], upper[i]);
             }
+            (m, v, x)
+        };
+        // A step that would carry a coordinate past f64::MAX (a huge lr, or theta already
+        // near the end of the range) is refused before anything is written, so that the
+        // error leaves theta and the moments as they were.
+        let current = self.m.iter().zip(&self.v).zip(theta.iter());
+        for (i, ((&m, &v), &x)) in current.enumerate() {
+            let (_, _, next) = update(i, m, v, x);
+            if !next.is_finite() {
+                return Err(Error::StepOverflow {
+                    index: i,
+                    theta: x,
+                    value: next,
+                });
+            }
+        }
+        let current = self.m.iter_mut().zip(&mut self.v).zip(theta.iter_mut());
+        for (i, ((m, v), x)) in current.enumerate() {
+            (*m, *v, *x) = update(i, *m, *v, *x);
+        }
+        self.t = t;
+        Ok(())
+    }
+}
+
+/// Adam's state between steps: the first moment `m`, the root of the second moment `v` (kept
+/// as a root so that huge gradients do not overflow it) and the number of steps taken.
+/// Empty vectors and zero steps before the first step.
+#[derive(Debug, Clone, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct AdamMoments {
+    /// The first moment estimate, one per coordinate.
+    pub m: Vec<f64>,
+    /// The root of the second moment estimate, one per coordinate (never negative).
+    pub v: Vec<f64>,
+    /// Steps taken.
+    pub steps: u64,
+}
+
+impl AdamMoments {
+    /// The rules [`Adam::set_moments`] enforces.
+    pub(crate) fn validate(&self) -> Result<(), Error> {
+        let bad = |field: &'static str, reason: String| Err(Error::InvalidState { field, reason });
+        if self.m.len() != self.v.len() {
+            return bad(
+                "adam.v",
+                format!("has length {}, m has {}", self.v.len(), self.m.len()),
+            );
+        }
+        if self.steps > i32::MAX as u64 {
+            return bad(
+                "adam.steps",
+                format!("= {} exceeds {}", self.steps, i32::MAX),
+            );
+        }
+        if (self.steps == 0) != self.m.is_empty() {
+            return bad(
+                "adam.steps",
+                format!("= {} with {} moments", self.steps, self.m.len()),
+            );
+        }
+        if let Some(i) = self.m.iter().position(|x| !x.is_finite()) {
+            return bad("adam.m", format!("[{i}] = {:e} is not finite", self.m[i]));
+        }
+        if let Some(i) = self.v.iter().position(|x| !(x.is_finite() && *x >= 0.0)) {
+            return bad(
+                "adam.v",
+                format!("[{i}] = {:e} is not finite and >= 0", self.v[i]),
+            );
         }
         Ok(())
     }

@@ -8,7 +8,7 @@ use rand::RngExt;
 
 use crate::check;
 use crate::error::Error;
-use crate::estimator::{Estimate, GradientEstimator};
+use crate::estimator::{mean, Estimate, GradientEstimator};
 use crate::objective::Objective;
 use crate::seeding::{stream_rng, stream_seed};
 
@@ -58,6 +58,14 @@ impl<F: Objective> FiniteDifference<F> {
 }
 
 impl<F: Objective> GradientEstimator for FiniteDifference<F> {
+    fn stream_position(&self) -> Option<u64> {
+        Some(self.estimates)
+    }
+
+    fn set_stream_position(&mut self, position: u64) {
+        self.estimates = position;
+    }
+
     fn estimate(&mut self, theta: &[f64], _sigma: f64) -> Result<Estimate, Error> {
         check::theta(theta)?;
         let n = theta.len();
@@ -68,9 +76,18 @@ impl<F: Objective> GradientEstimator for FiniteDifference<F> {
         self.point.extend_from_slice(theta);
         let mut gradient = vec![0.0; n];
         let mut mean_value = 0.0;
+        let mut pair_means = Vec::with_capacity(n);
         for i in 0..n {
             let seed = stream_seed(self.seed, index, i as u64);
             let side = |x: f64, sample: usize, point: &mut Vec<f64>| {
+                // theta near f64::MAX plus the step overflows: never evaluate f there.
+                if !x.is_finite() {
+                    return Err(Error::NonFinitePoint {
+                        sample,
+                        index: i,
+                        value: x,
+                    });
+                }
                 point[i] = x;
                 evaluate_finite(&self.objective, point, seed, sample)
             };
@@ -79,9 +96,15 @@ impl<F: Objective> GradientEstimator for FiniteDifference<F> {
             self.point[i] = theta[i];
             gradient[i] = (0.5 * plus - 0.5 * minus) / h;
             mean_value += (plus + minus) / (2 * n) as f64;
+            pair_means.push(0.5 * plus + 0.5 * minus);
         }
         check::gradient(&gradient)?;
+        if !mean_value.is_finite() {
+            // Values near +-f64::MAX overflow the running sum; their mean does not.
+            mean_value = mean(&pair_means);
+        }
         Ok(Estimate {
+            resampled: 0,
             gradient,
             evaluations: 2 * n,
             mean_value,
@@ -131,6 +154,14 @@ impl<F: Objective> Spsa<F> {
 }
 
 impl<F: Objective> GradientEstimator for Spsa<F> {
+    fn stream_position(&self) -> Option<u64> {
+        Some(self.estimates)
+    }
+
+    fn set_stream_position(&mut self, position: u64) {
+        self.estimates = position;
+    }
+
     fn estimate(&mut self, theta: &[f64], sigma: f64) -> Result<Estimate, Error> {
         check::sigma(sigma)?;
         check::theta(theta)?;
@@ -156,6 +187,7 @@ impl<F: Objective> GradientEstimator for Spsa<F> {
         let gradient: Vec<f64> = delta.iter().map(|d| half_diff / (sigma * d)).collect();
         check::gradient(&gradient)?;
         Ok(Estimate {
+            resampled: 0,
             gradient,
             evaluations: 2,
             mean_value: 0.5 * values[0] + 0.5 * values[1],

@@ -11,7 +11,7 @@ pub enum Error {
     EmptyTheta,
 
     /// A coordinate of theta is NaN or infinite.
-    #[error("theta[{index}] = {value} is not finite")]
+    #[error("theta[{index}] = {value:e} is not finite")]
     NonFiniteTheta {
         /// The coordinate.
         index: usize,
@@ -20,11 +20,11 @@ pub enum Error {
     },
 
     /// A scalar spread that is not a finite positive number.
-    #[error("sigma = {0} must be finite and > 0")]
+    #[error("sigma = {0:e} must be finite and > 0")]
     InvalidSigma(f64),
 
     /// A per-dimension spread that is not a finite positive number.
-    #[error("spreads[{index}] = {value} must be finite and > 0")]
+    #[error("spreads[{index}] = {value:e} must be finite and > 0")]
     InvalidSpread {
         /// The coordinate.
         index: usize,
@@ -57,7 +57,7 @@ pub enum Error {
 
     /// A perturbed point overflowed (theta plus its offset is not finite).
     #[error(
-        "perturbed point {sample} has coordinate {index} = {value} (theta plus offset overflowed)"
+        "perturbed point {sample} has coordinate {index} = {value:e} (theta plus offset overflowed)"
     )]
     NonFinitePoint {
         /// Which evaluation of the estimate.
@@ -69,7 +69,10 @@ pub enum Error {
     },
 
     /// The objective returned NaN or an infinity.
-    #[error("f returned {value} at evaluation {sample}, point {}", Preview(point))]
+    #[error(
+        "f returned {value:e} at evaluation {sample}, point {}",
+        Preview(point)
+    )]
     NonFiniteValue {
         /// Which evaluation of the estimate.
         sample: usize,
@@ -81,7 +84,7 @@ pub enum Error {
 
     /// The gradient overflowed: values of f too large for the spread (for example f near
     /// 1e300 with sigma 1e-12). Rescale f or enlarge sigma.
-    #[error("gradient coordinate {index} = {value} is not finite: f's values are too large for the spread; rescale f")]
+    #[error("gradient coordinate {index} = {value:e} is not finite: f's values are too large for the spread; rescale f")]
     NonFiniteGradient {
         /// The coordinate.
         index: usize,
@@ -90,7 +93,7 @@ pub enum Error {
     },
 
     /// A configuration value out of its range (annealer, optimiser, baselines).
-    #[error("{name} = {value} is invalid: {reason}")]
+    #[error("{name} = {value:e} is invalid: {reason}")]
     InvalidParameter {
         /// The parameter's name.
         name: &'static str,
@@ -112,8 +115,41 @@ pub enum Error {
         allowed: &'static str,
     },
 
+    /// An Adam step would carry a coordinate of theta past the largest finite number (a
+    /// learning rate too large for theta's scale). Nothing was changed.
+    #[error("the step would overflow theta[{index}] = {theta:e} to {value:e}; reduce lr")]
+    StepOverflow {
+        /// The coordinate.
+        index: usize,
+        /// Its value before the step.
+        theta: f64,
+        /// The non-finite value the step would give.
+        value: f64,
+    },
+
+    /// A saved optimiser state that cannot be continued from (see
+    /// [`crate::Optimizer::minimize_from`]): a dimension that does not match, a NaN, a
+    /// history of the wrong length. Nothing of the state was used.
+    #[error("invalid optimizer state: {field} {reason}")]
+    InvalidState {
+        /// The part of the state at fault.
+        field: &'static str,
+        /// What is wrong, with the offending value.
+        reason: String,
+    },
+
+    /// The objective panicked during an estimate and the estimator was set to catch panics
+    /// ([`crate::PlateauFreeGradient::catch_panics`]).
+    #[error("f panicked during estimate {estimate}: {message}")]
+    ObjectivePanicked {
+        /// The index of the estimate (its random streams).
+        estimate: u64,
+        /// The panic's message (cut to 200 characters), or a note that it had none.
+        message: String,
+    },
+
     /// A lower bound above its upper bound.
-    #[error("bounds[{index}]: lower {lower} > upper {upper} (or not a number)")]
+    #[error("bounds[{index}]: lower {lower:e} > upper {upper:e} (or not a number)")]
     InvalidBounds {
         /// The coordinate.
         index: usize,
@@ -124,18 +160,19 @@ pub enum Error {
     },
 }
 
-/// Shows at most eight coordinates: a point may have a million.
+/// Shows at most four coordinates, in `{:e}` form, and the count: a point may have a million
+/// coordinates and a coordinate 300 digits.
 struct Preview<'a>(&'a [f64]);
 
 impl fmt::Display for Preview<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        const SHOWN: usize = 8;
+        const SHOWN: usize = 4;
         write!(f, "[")?;
         for (i, x) in self.0.iter().take(SHOWN).enumerate() {
             if i > 0 {
                 write!(f, ", ")?;
             }
-            write!(f, "{x}")?;
+            write!(f, "{x:e}")?;
         }
         if self.0.len() > SHOWN {
             write!(f, ", ... ({} coordinates)", self.0.len())?;
@@ -159,5 +196,22 @@ mod tests {
         assert!(text.contains("evaluation 3"), "{text}");
         assert!(text.contains("(100 coordinates)"), "{text}");
         assert!(text.len() < 200, "{text}");
+    }
+
+    #[test]
+    fn huge_values_print_short() {
+        let e = Error::NonFiniteGradient {
+            index: 0,
+            value: f64::MAX,
+        };
+        let text = e.to_string();
+        assert!(text.contains("1.7976931348623157e308"), "{text}");
+        assert!(text.len() < 150, "{text}");
+        let e = Error::NonFiniteValue {
+            sample: 0,
+            value: f64::INFINITY,
+            point: vec![-f64::MAX; 1000],
+        };
+        assert!(e.to_string().len() < 200, "{e}");
     }
 }

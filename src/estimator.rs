@@ -1,6 +1,10 @@
 //! `PlateauFreeGradient`: the Monte Carlo estimate of the Gaussian-smoothed gradient.
 
+use std::any::Any;
 use std::fmt;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
 
 use rayon::prelude::*;
 
@@ -9,7 +13,9 @@ use crate::error::Error;
 use crate::kernel::chi_mean;
 use crate::objective::{Objective, Points};
 use crate::sampling::{fill_normal_local, Sampling, Scales};
-use crate::seeding::{stream_rng, stream_seed, OBJECTIVE_STREAM, ORTHOGONAL_STREAM};
+use crate::seeding::{
+    stream_rng, stream_seed, OBJECTIVE_STREAM, ORTHOGONAL_STREAM, RESAMPLE_STREAM,
+};
 
 /// One gradient estimate.
 #[derive(Debug, Clone, PartialEq)]
@@ -22,6 +28,61 @@ pub struct Estimate {
     /// The mean of the evaluated values of `f` (at the perturbed points, not at theta): a
     /// noisy estimate of the smoothed objective itself.
     pub mean_value: f64,
+    /// How many times the estimate's perturbations were redrawn because `f` returned a
+    /// non-finite value ([`OnFailure::Resample`]); 0 otherwise.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub resampled: usize,
+}
+
+impl Estimate {
+    /// An estimate that needed no redraws: for a [`GradientEstimator`] of your own, so that
+    /// it keeps compiling when `Estimate` gains fields.
+    ///
+    /// ```
+    /// let e = plateau::Estimate::new(vec![1.0, -2.0], 4, 0.5);
+    /// assert_eq!((e.evaluations, e.resampled), (4, 0));
+    /// ```
+    #[must_use]
+    pub fn new(gradient: Vec<f64>, evaluations: usize, mean_value: f64) -> Self {
+        Estimate {
+            gradient,
+            evaluations,
+            mean_value,
+            resampled: 0,
+        }
+    }
+}
+
+/// What an estimate does when `f` returns NaN or an infinity.
+///
+/// ```
+/// use plateau::{OnFailure, PlateauFreeGradient};
+/// // NaN on a quarter of the line: the estimate redraws until every value is finite.
+/// let f = |x: &[f64]| if x[0].fract().abs() < 0.25 { f64::NAN } else { x[0] };
+/// let mut grad = PlateauFreeGradient::new(f).on_failure(OnFailure::Resample { limit: 50 });
+/// let est = grad.estimate(&[0.5], 0.3)?;
+/// assert!(est.gradient[0].is_finite());
+/// assert_eq!(est.evaluations, 2 * (est.resampled + 1));
+/// # Ok::<(), plateau::Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum OnFailure {
+    /// Return [`Error::NonFiniteValue`], naming the evaluation, the value and the point
+    /// (the default).
+    #[default]
+    Fail,
+    /// Redraw every perturbation of the estimate (from streams derived from the seed, the
+    /// estimate's index and the attempt, so still deterministic) and evaluate again, up to
+    /// `limit` times; then fail as [`OnFailure::Fail`]. The whole set is redrawn, not only
+    /// the failed pair, so that antithetic pairs and orthogonal blocks stay intact. The
+    /// redraws are counted in [`Estimate::resampled`] and their evaluations in
+    /// [`Estimate::evaluations`]. Note that the estimate then averages over the region where
+    /// `f` is finite: it is the gradient of `f` restricted to that region.
+    Resample {
+        /// The largest number of redraws per estimate.
+        limit: usize,
+    },
 }
 
 /// Anything that turns `(theta, sigma)` into a gradient [`Estimate`]: the plateau-free
@@ -30,9 +91,28 @@ pub struct Estimate {
 pub trait GradientEstimator {
     /// Estimates the gradient at `theta` for the spread `sigma`.
     fn estimate(&mut self, theta: &[f64], sigma: f64) -> Result<Estimate, Error>;
+
+    /// Where the estimator's random streams stand: the number of estimates drawn so far, or
+    /// `None` for an estimator without seeded streams (the default). A saved
+    /// [`crate::OptimizerState`] records it so that a resumed run draws what the
+    /// uninterrupted run would have drawn.
+    fn stream_position(&self) -> Option<u64> {
+        None
+    }
+
+    /// Moves the random streams to `position` (the next estimate is estimate `position`).
+    /// The default does nothing, matching a `stream_position` of `None`.
+    fn set_stream_position(&mut self, position: u64) {
+        let _ = position;
+    }
 }
 
-type Evaluator<F> = fn(&F, Points<'_>, &[u64], &mut [f64]);
+/// Evaluates the objective at the points; with `catch`, a panic of `f` is caught and
+/// returned as its payload.
+type Evaluator<F> = fn(&F, Points<'_>, &[u64], &mut [f64], bool) -> Result<(), Panic>;
+
+/// A caught panic's payload.
+type Panic = Box<dyn Any + Send>;
 
 /// The plateau-free gradient of an objective `f`: the gradient of `f` smoothed by a
 /// Gaussian of spread `sigma` in parameter space, estimated from `samples` evaluations of `f`.
@@ -61,11 +141,17 @@ type Evaluator<F> = fn(&F, Points<'_>, &[u64], &mut [f64]);
 /// The result is a function of the seed, the inputs and the estimate's index alone:
 /// bit-for-bit the same sequentially, in parallel, and with any number of threads.
 ///
-/// # When `f` panics
-/// The panic is not caught: it unwinds out of [`PlateauFreeGradient::estimate`] (through
-/// rayon's worker when evaluating in parallel, which re-raises it on the caller's thread).
-/// The estimator stays usable afterwards; the estimate that panicked is lost but still
-/// counted, so later estimates draw fresh perturbations.
+/// # When `f` fails
+/// A NaN or infinite value is an [`Error::NonFiniteValue`] by default, or is redrawn with
+/// [`OnFailure::Resample`] (see [`PlateauFreeGradient::on_failure`]).
+///
+/// A panic is not caught by default: it unwinds out of [`PlateauFreeGradient::estimate`]
+/// (through rayon's worker when evaluating in parallel, which re-raises it on the caller's
+/// thread). With [`PlateauFreeGradient::catch_panics`] it is returned as
+/// [`Error::ObjectivePanicked`] instead (the panic hook still prints its message; in
+/// parallel, points not yet started are skipped once one has panicked). Either way the
+/// estimator stays usable afterwards; the estimate that panicked is lost but still counted,
+/// so later estimates draw fresh perturbations.
 pub struct PlateauFreeGradient<F> {
     objective: F,
     settings: Settings,
@@ -83,6 +169,8 @@ struct Settings {
     orthogonal: bool,
     seed: u64,
     parallel: bool,
+    on_failure: OnFailure,
+    catch_panics: bool,
 }
 
 impl Settings {
@@ -181,6 +269,8 @@ impl<F> fmt::Debug for PlateauFreeGradient<F> {
             .field("orthogonal", &s.orthogonal)
             .field("seed", &s.seed)
             .field("parallel", &s.parallel)
+            .field("on_failure", &s.on_failure)
+            .field("catch_panics", &s.catch_panics)
             .field("estimates", &self.estimates)
             .finish_non_exhaustive()
     }
@@ -200,6 +290,8 @@ impl<F: Objective> PlateauFreeGradient<F> {
                 orthogonal: false,
                 seed: 0,
                 parallel: false,
+                on_failure: OnFailure::Fail,
+                catch_panics: false,
             },
             estimates: 0,
             evaluator: evaluate_sequential::<F>,
@@ -245,6 +337,35 @@ impl<F: Objective> PlateauFreeGradient<F> {
     #[must_use]
     pub fn seed(mut self, seed: u64) -> Self {
         self.settings.seed = seed;
+        self
+    }
+
+    /// What an estimate does when `f` returns NaN or an infinity (default:
+    /// [`OnFailure::Fail`]).
+    #[must_use]
+    pub fn on_failure(mut self, policy: OnFailure) -> Self {
+        self.settings.on_failure = policy;
+        self
+    }
+
+    /// Whether a panic inside `f` is caught and returned as [`Error::ObjectivePanicked`]
+    /// (default: off, the panic unwinds through the caller). In an [`crate::Optimizer`] run
+    /// the error comes with the state of the last good iteration ([`crate::RunError`]).
+    ///
+    /// ```
+    /// use plateau::{Error, PlateauFreeGradient};
+    /// let f = |x: &[f64]| if x[0] > 10.0 { panic!("renderer crashed") } else { x[0] };
+    /// let mut grad = PlateauFreeGradient::new(f).catch_panics(true);
+    /// # std::panic::set_hook(Box::new(|_| {})); // keep the doctest's output clean
+    /// match grad.estimate(&[100.0], 0.1) {
+    ///     Err(Error::ObjectivePanicked { message, .. }) => assert_eq!(message, "renderer crashed"),
+    ///     other => panic!("{other:?}"),
+    /// }
+    /// assert!(grad.estimate(&[0.0], 0.1).is_ok()); // still usable
+    /// ```
+    #[must_use]
+    pub fn catch_panics(mut self, catch: bool) -> Self {
+        self.settings.catch_panics = catch;
         self
     }
 
@@ -328,39 +449,93 @@ impl<F: Objective> PlateauFreeGradient<F> {
         let b = &mut self.buffers;
         b.resize(settings.draws(), settings.samples, n);
         let c_n = b.chi_mean(n);
-        let stream = Stream {
-            seed: settings.seed,
-            index,
-        };
-        // The first draw lives in the memory of the gradient that will be returned: the
-        // estimate has to write that memory anyway, and one vector less is touched.
-        let first = stream.draw(&settings, c_n, n, b);
-        if let Err(point_error) = write_points(&settings, theta, spreads, &first, b) {
-            if !theta_checked {
-                // Bad input is reported as such and does not consume an estimate.
-                check::theta(theta)?;
+        let mut resampled = 0usize;
+        loop {
+            // Attempt 0 is the estimate as it always was; a redraw takes streams derived
+            // from the seed, the index and the attempt: deterministic, and the same on any
+            // thread.
+            let seed = if resampled == 0 {
+                settings.seed
+            } else {
+                stream_seed(settings.seed, index, RESAMPLE_STREAM ^ resampled as u64)
+            };
+            let stream = Stream { seed, index };
+            // The first draw lives in the memory of the gradient that will be returned: the
+            // estimate has to write that memory anyway, and one vector less is touched.
+            let first = stream.draw(&settings, c_n, n, b);
+            if let Err(point_error) = write_points(&settings, theta, spreads, &first, b) {
+                if !theta_checked && resampled == 0 {
+                    // Bad input is reported as such and does not consume an estimate.
+                    check::theta(theta)?;
+                }
+                self.estimates = index + 1;
+                return Err(point_error);
             }
-            self.estimates += 1;
-            return Err(point_error);
-        }
-        stream.objective_seeds(&settings, &mut b.seeds);
-        // Counted before `f` runs: an estimate whose `f` panics is still spent.
-        self.estimates += 1;
+            stream.objective_seeds(&settings, &mut b.seeds);
+            // Counted before `f` runs: an estimate whose `f` panics is still spent.
+            self.estimates = index + 1;
 
-        (self.evaluator)(
-            &self.objective,
-            Points::new(&b.points, n),
-            &b.seeds,
-            &mut b.values,
-        );
-        check::values(&b.values, &b.points, n)?;
-        let gradient = accumulate(&settings, spreads, first, b)?;
-        let mean_value = b.values.iter().map(|v| v / settings.samples as f64).sum();
-        Ok(Estimate {
-            gradient,
-            evaluations: settings.samples,
-            mean_value,
-        })
+            let evaluated = (self.evaluator)(
+                &self.objective,
+                Points::new(&b.points, n),
+                &b.seeds,
+                &mut b.values,
+                settings.catch_panics,
+            );
+            if let Err(payload) = evaluated {
+                return Err(Error::ObjectivePanicked {
+                    estimate: index,
+                    message: panic_message(payload.as_ref()),
+                });
+            }
+            match check::values(&b.values, &b.points, n) {
+                Ok(()) => {}
+                Err(e) => match settings.on_failure {
+                    OnFailure::Resample { limit } if resampled < limit => {
+                        resampled += 1;
+                        continue;
+                    }
+                    _ => return Err(e),
+                },
+            }
+            let gradient = accumulate(&settings, spreads, first, b)?;
+            let mean_value = mean(&b.values);
+            return Ok(Estimate {
+                gradient,
+                evaluations: settings.samples * (resampled + 1),
+                mean_value,
+                resampled,
+            });
+        }
+    }
+}
+
+/// The mean of finite values, itself always finite. Summing the shares `v / N` is the
+/// usual form (and gives the usual bits); for values near `+-f64::MAX` the sum of the shares
+/// can round past the largest finite number, and in units of the largest value it cannot.
+pub(crate) fn mean(values: &[f64]) -> f64 {
+    let n = values.len() as f64;
+    let plain: f64 = values.iter().map(|v| v / n).sum();
+    if plain.is_finite() {
+        return plain;
+    }
+    let scale = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    values.iter().map(|v| v / scale).sum::<f64>() / n * scale
+}
+
+/// A panic's message, cut to 200 characters (a payload that is not text is named as such).
+fn panic_message(payload: &(dyn Any + Send)) -> String {
+    let text = if let Some(s) = payload.downcast_ref::<&str>() {
+        s
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.as_str()
+    } else {
+        "(a panic payload that is not text)"
+    };
+    const LIMIT: usize = 200;
+    match text.char_indices().nth(LIMIT) {
+        Some((cut, _)) => format!("{}...", &text[..cut]),
+        None => text.to_owned(),
     }
 }
 
@@ -385,10 +560,31 @@ impl<F: Objective> GradientEstimator for PlateauFreeGradient<F> {
     fn estimate(&mut self, theta: &[f64], sigma: f64) -> Result<Estimate, Error> {
         PlateauFreeGradient::estimate(self, theta, sigma)
     }
+
+    fn stream_position(&self) -> Option<u64> {
+        Some(self.estimates)
+    }
+
+    fn set_stream_position(&mut self, position: u64) {
+        self.estimates = position;
+    }
 }
 
-fn evaluate_sequential<F: Objective>(f: &F, points: Points<'_>, seeds: &[u64], out: &mut [f64]) {
-    f.evaluate_batch(points, seeds, out);
+fn evaluate_sequential<F: Objective>(
+    f: &F,
+    points: Points<'_>,
+    seeds: &[u64],
+    out: &mut [f64],
+    catch: bool,
+) -> Result<(), Panic> {
+    if catch {
+        // Unwind safety: `out` is scratch that every estimate overwrites before reading, and
+        // the estimator's counter is already advanced; nothing half-written is used again.
+        catch_unwind(AssertUnwindSafe(|| f.evaluate_batch(points, seeds, out)))
+    } else {
+        f.evaluate_batch(points, seeds, out);
+        Ok(())
+    }
 }
 
 fn evaluate_parallel<F: Objective + Sync>(
@@ -396,10 +592,36 @@ fn evaluate_parallel<F: Objective + Sync>(
     points: Points<'_>,
     seeds: &[u64],
     out: &mut [f64],
-) {
-    out.par_iter_mut()
-        .enumerate()
-        .for_each(|(i, o)| *o = f.evaluate(points.get(i), seeds[i]));
+    catch: bool,
+) -> Result<(), Panic> {
+    if !catch {
+        out.par_iter_mut()
+            .enumerate()
+            .for_each(|(i, o)| *o = f.evaluate(points.get(i), seeds[i]));
+        return Ok(());
+    }
+    // Each point is caught on its own thread; once one has panicked the points not yet
+    // started are skipped, so that a failing objective is not run (and its panic message
+    // printed) once per point.
+    let panicked = AtomicBool::new(false);
+    let first: Mutex<Option<Panic>> = Mutex::new(None);
+    out.par_iter_mut().enumerate().for_each(|(i, o)| {
+        if panicked.load(Ordering::Relaxed) {
+            return;
+        }
+        match catch_unwind(AssertUnwindSafe(|| f.evaluate(points.get(i), seeds[i]))) {
+            Ok(v) => *o = v,
+            Err(payload) => {
+                panicked.store(true, Ordering::Relaxed);
+                let mut slot = first.lock().unwrap_or_else(|e| e.into_inner());
+                slot.get_or_insert(payload);
+            }
+        }
+    });
+    match first.into_inner().unwrap_or_else(|e| e.into_inner()) {
+        Some(payload) => Err(payload),
+        None => Ok(()),
+    }
 }
 
 /// The spreads of an estimate, one per coordinate: a slice, or one scalar for all (which

@@ -35,6 +35,10 @@
 //!   cosine ones.
 //! - [`Adam`]: with optional box bounds.
 //! - [`Optimizer`]: the loop, with an observer and a [`History`].
+//! - [`OptimizerState`]: a run's state as a value, to save and continue from
+//!   ([`Optimizer::minimize_from`]); an error mid-run returns it with the history so far
+//!   ([`RunError`]). A failing objective is reported, resampled ([`OnFailure`]) or, with
+//!   [`PlateauFreeGradient::catch_panics`], caught; see `docs/reliability.md`.
 //! - [`baseline`]: finite differences and SPSA, for comparison on the same loop.
 //! - [`kernel`]: the Gaussian kernel, the inverse CDF of its derivative, `c_n`.
 //! - [`seeding`]: how every random stream is seeded (SplitMix64 of the seed, the estimate's
@@ -80,14 +84,14 @@ mod optimize;
 mod sampling;
 pub mod seeding;
 
-pub use adam::Adam;
+pub use adam::{Adam, AdamMoments};
 pub use anneal::{Annealer, Schedule, PAPER_SIGMA_MIN, PAPER_WARMUP};
 pub use error::Error;
-pub use estimator::{Estimate, GradientEstimator, PlateauFreeGradient};
+pub use estimator::{Estimate, GradientEstimator, OnFailure, PlateauFreeGradient};
 pub use hessian::{smoothed_hessian, HessianEstimate};
 pub use minimize::{minimize, Metric, Minimizer, Minimum, Stop, Strategy, FULL_METRIC_MAX_DIM};
 pub use objective::{Batch, Objective, Points, Seeded};
-pub use optimize::{History, Optimizer, Step};
+pub use optimize::{History, Optimizer, OptimizerState, RunError, Step};
 pub use sampling::Sampling;
 
 /// The README's examples, compiled and run as doctests so that they stay true.

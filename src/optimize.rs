@@ -2,7 +2,7 @@
 
 use std::ops::ControlFlow;
 
-use crate::adam::Adam;
+use crate::adam::{Adam, AdamMoments};
 use crate::anneal::Annealer;
 use crate::check;
 use crate::error::Error;
@@ -25,8 +25,9 @@ pub struct Step<'a> {
 #[derive(Debug, Clone, PartialEq, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct History {
-    /// Parameters after each iteration (only after the last one when
-    /// [`Optimizer::record_theta`] is off).
+    /// Parameters after each iteration when [`Optimizer::record_theta`] is on; otherwise
+    /// only the latest point. After [`Optimizer::minimize`] its last entry is always the
+    /// point the run ended at: the start itself when no iteration ran.
     pub theta: Vec<Vec<f64>>,
     /// The spread of each iteration.
     pub sigma: Vec<f64>,
@@ -39,7 +40,9 @@ pub struct History {
 }
 
 impl History {
-    /// The parameters after the last completed iteration, if any.
+    /// The parameters the run ended at. After [`Optimizer::minimize`] (or
+    /// [`Optimizer::minimize_with`]) this is always `Some`: a run of zero iterations ends
+    /// at its start.
     pub fn last_theta(&self) -> Option<&[f64]> {
         self.theta.last().map(Vec::as_slice)
     }
@@ -47,6 +50,155 @@ impl History {
     /// The number of completed iterations.
     pub fn iterations(&self) -> usize {
         self.sigma.len()
+    }
+}
+
+/// Everything a run needs to continue where it stopped, as a value to keep or save (with
+/// the `serde` feature it serialises): continued by [`Optimizer::minimize_from`], it gives
+/// bit for bit the run that was never interrupted, provided the optimiser and estimator are
+/// configured as before.
+///
+/// ```
+/// use std::ops::ControlFlow;
+/// use plateau::{Adam, Annealer, Optimizer, OptimizerState, PlateauFreeGradient};
+///
+/// let f = |x: &[f64]| (x[0] - 1.0).abs();
+/// let new_opt = || Optimizer::new(Adam::new(0.1).unwrap(), Annealer::constant(0.3, 20).unwrap());
+/// let whole = new_opt().minimize(&mut PlateauFreeGradient::new(f).seed(3), &[0.0])?;
+///
+/// // Stopped after 5 iterations (Ctrl-C, a time limit), then continued by a fresh process.
+/// let mut grad = PlateauFreeGradient::new(f).seed(3);
+/// let start = OptimizerState::new(&[0.0])?;
+/// let saved = new_opt().minimize_from(&mut grad, start, |s| {
+///     if s.iteration == 4 { std::ops::ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+/// })?;
+/// assert_eq!(saved.iteration, 5);
+/// let mut grad = PlateauFreeGradient::new(f).seed(3);
+/// let done = new_opt().minimize_from(&mut grad, saved, |_| ControlFlow::Continue(()))?;
+/// assert_eq!(done.theta, whole.last_theta().unwrap());
+/// assert_eq!(done.history.value, whole.value);
+/// # Ok::<(), plateau::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct OptimizerState {
+    /// Iterations completed; the next iteration has this index (and the annealer's sigma
+    /// for it).
+    pub iteration: usize,
+    /// The current parameters.
+    pub theta: Vec<f64>,
+    /// Adam's moments and step count.
+    pub adam: AdamMoments,
+    /// The estimator's [`GradientEstimator::stream_position`] before the next iteration;
+    /// `None` leaves the estimator's streams where they are.
+    pub stream_position: Option<u64>,
+    /// The record of the completed iterations.
+    pub history: History,
+}
+
+impl OptimizerState {
+    /// The state before the first iteration, at `start`.
+    ///
+    /// # Errors
+    /// An empty or non-finite `start`.
+    pub fn new(start: &[f64]) -> Result<Self, Error> {
+        check::theta(start)?;
+        Ok(OptimizerState {
+            iteration: 0,
+            theta: start.to_vec(),
+            adam: AdamMoments::default(),
+            stream_position: None,
+            history: History::default(),
+        })
+    }
+
+    /// Checks that the state can be continued from: theta non-empty and finite, Adam's
+    /// moments valid and of theta's dimension with one step per iteration, a history of one
+    /// entry per iteration whose points have theta's dimension. [`Optimizer::minimize_from`]
+    /// calls it before using anything.
+    ///
+    /// ```
+    /// use plateau::{Error, OptimizerState};
+    /// let mut state = OptimizerState::new(&[1.0, 2.0])?;
+    /// state.theta[1] = f64::NAN;
+    /// assert!(matches!(state.validate(), Err(Error::InvalidState { field: "theta", .. })));
+    /// # Ok::<(), plateau::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] naming the part at fault and the value.
+    pub fn validate(&self) -> Result<(), Error> {
+        let bad = |field: &'static str, reason: String| Err(Error::InvalidState { field, reason });
+        let n = self.theta.len();
+        if let Err(e) = check::theta(&self.theta) {
+            return bad("theta", format!("is unusable: {e}"));
+        }
+        self.adam.validate()?;
+        if self.adam.steps > 0 && self.adam.m.len() != n {
+            return bad(
+                "adam.m",
+                format!("has dimension {}, theta has {n}", self.adam.m.len()),
+            );
+        }
+        if self.adam.steps != self.iteration as u64 {
+            return bad(
+                "adam.steps",
+                format!("= {} after {} iterations", self.adam.steps, self.iteration),
+            );
+        }
+        let h = &self.history;
+        if h.sigma.len() != self.iteration || h.value.len() != self.iteration {
+            return bad(
+                "history",
+                format!(
+                    "has {} sigmas and {} values for {} iterations",
+                    h.sigma.len(),
+                    h.value.len(),
+                    self.iteration
+                ),
+            );
+        }
+        if let Some(p) = h.theta.iter().find(|p| p.len() != n) {
+            return bad(
+                "history.theta",
+                format!("holds a point of dimension {}, theta has {n}", p.len()),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// A run that ended in an error: the error, and the state after the last good iteration
+/// (its history included), from which [`Optimizer::minimize_from`] continues. Resuming
+/// repeats the failed iteration with the same random streams.
+///
+/// Converts into the plain [`Error`] with `?` (dropping the state), and compares equal to
+/// an [`Error`] when its error does.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{error} (after {} completed iterations)", state.iteration)]
+pub struct RunError {
+    /// What went wrong.
+    pub error: Error,
+    /// The state after the last good iteration.
+    pub state: Box<OptimizerState>,
+}
+
+impl RunError {
+    /// The record of the iterations that completed before the error.
+    pub fn history(&self) -> &History {
+        &self.state.history
+    }
+}
+
+impl From<RunError> for Error {
+    fn from(e: RunError) -> Error {
+        e.error
+    }
+}
+
+impl PartialEq<Error> for RunError {
+    fn eq(&self, other: &Error) -> bool {
+        self.error == *other
     }
 }
 
@@ -79,7 +231,7 @@ impl Optimizer {
             iterations: annealer.iterations(),
             adam,
             annealer,
-            record_theta: true,
+            record_theta: false,
         }
     }
 
@@ -91,8 +243,9 @@ impl Optimizer {
         self
     }
 
-    /// Whether the history keeps theta for every iteration (default: yes). Turn it off for
-    /// very long parameter vectors; the last theta is always kept.
+    /// Whether the history keeps theta for every iteration (default: no, since it costs `8n`
+    /// bytes an iteration: 80 MB per 10 iterations at `n = 10^6`). The last theta is always
+    /// kept, overwritten in place.
     #[must_use]
     pub fn record_theta(mut self, record: bool) -> Self {
         self.record_theta = record;
@@ -113,7 +266,8 @@ impl Optimizer {
     ///
     /// # Errors
     /// Whatever the estimator or Adam report (bad input, non-finite values of `f`); the run
-    /// stops at the first error.
+    /// stops at the first error. To keep the history of the good iterations and the state
+    /// to continue from, use [`Optimizer::run`].
     pub fn minimize<G: GradientEstimator + ?Sized>(
         &mut self,
         estimator: &mut G,
@@ -123,33 +277,156 @@ impl Optimizer {
     }
 
     /// Runs from `start`, calling `observer` after every iteration; the observer stops the run
-    /// by returning `ControlFlow::Break(())`. Adam's state is reset at the start of every run.
+    /// by returning `ControlFlow::Break(())`. Adam's state is reset at the start of every run;
+    /// the estimator's streams continue from where they are.
     ///
     /// # Errors
-    /// As [`Optimizer::minimize`].
+    /// As [`Optimizer::minimize`]: the error alone ([`Optimizer::run`] keeps the rest).
     pub fn minimize_with<G, O>(
         &mut self,
         estimator: &mut G,
         start: &[f64],
-        mut observer: O,
+        observer: O,
     ) -> Result<History, Error>
     where
         G: GradientEstimator + ?Sized,
         O: FnMut(&Step<'_>) -> ControlFlow<()>,
     {
-        check::theta(start)?;
-        self.adam.reset();
-        let mut theta = start.to_vec();
-        let mut history = History::default();
-        for iteration in 0..self.iterations {
+        self.run(estimator, start, observer).map_err(Error::from)
+    }
+
+    /// [`Optimizer::minimize_with`], keeping what the run has on error: a [`RunError`]
+    /// carries the error, the history of the good iterations and the state to continue from
+    /// ([`Optimizer::minimize_from`]).
+    ///
+    /// ```
+    /// use std::ops::ControlFlow;
+    /// use plateau::{Adam, Annealer, Error, Optimizer, PlateauFreeGradient};
+    ///
+    /// // f fails once theta has moved below -0.5.
+    /// let f = |x: &[f64]| if x[0] < -0.5 { f64::NAN } else { x[0] };
+    /// let mut grad = PlateauFreeGradient::new(f).samples(4);
+    /// let mut opt = Optimizer::new(Adam::new(0.1)?, Annealer::constant(0.01, 100)?);
+    /// let err = opt.run(&mut grad, &[0.0], |_| ControlFlow::Continue(())).unwrap_err();
+    /// assert!(matches!(err.error, Error::NonFiniteValue { .. }));
+    /// let kept = err.history().iterations();
+    /// assert!(kept > 0 && err.history().last_theta().unwrap()[0] >= -0.5 - 0.2);
+    /// # Ok::<(), plateau::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`Optimizer::minimize`], with the history and the state.
+    pub fn run<G, O>(
+        &mut self,
+        estimator: &mut G,
+        start: &[f64],
+        observer: O,
+    ) -> Result<History, RunError>
+    where
+        G: GradientEstimator + ?Sized,
+        O: FnMut(&Step<'_>) -> ControlFlow<()>,
+    {
+        let state = OptimizerState::new(start).map_err(|error| RunError {
+            error,
+            state: Box::new(OptimizerState {
+                iteration: 0,
+                theta: start.to_vec(),
+                adam: AdamMoments::default(),
+                stream_position: None,
+                history: History::default(),
+            }),
+        })?;
+        let state = self.minimize_from(estimator, state, observer)?;
+        let mut history = state.history;
+        // The documented `history.last_theta().unwrap()` must hold even for zero iterations.
+        if history.theta.is_empty() {
+            history.theta.push(state.theta);
+        }
+        Ok(history)
+    }
+
+    /// Continues a run from `state` (a fresh [`OptimizerState::new`], or one returned by an
+    /// earlier run or a [`RunError`], possibly saved and loaded) up to the optimiser's last
+    /// iteration, calling `observer` after every iteration; returns the state at the end,
+    /// its history extended. Adam's moments and the estimator's stream position are set
+    /// from the state, so an interrupted and continued run is bit for bit the run that was
+    /// never interrupted (with the same configuration). See [`OptimizerState`].
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] for a state that [`OptimizerState::validate`] rejects (the
+    /// state comes back unused in the [`RunError`]); otherwise as [`Optimizer::minimize`].
+    pub fn minimize_from<G, O>(
+        &mut self,
+        estimator: &mut G,
+        state: OptimizerState,
+        mut observer: O,
+    ) -> Result<OptimizerState, RunError>
+    where
+        G: GradientEstimator + ?Sized,
+        O: FnMut(&Step<'_>) -> ControlFlow<()>,
+    {
+        if let Err(error) = state.validate() {
+            return Err(RunError {
+                error,
+                state: Box::new(state),
+            });
+        }
+        let OptimizerState {
+            mut iteration,
+            mut theta,
+            adam,
+            stream_position,
+            mut history,
+        } = state;
+        if let Err(error) = self.adam.set_moments(adam.clone()) {
+            // Unreachable after `validate`, but a state is never half-used.
+            let state = OptimizerState {
+                iteration,
+                theta,
+                adam,
+                stream_position,
+                history,
+            };
+            return Err(RunError {
+                error,
+                state: Box::new(state),
+            });
+        }
+        if let Some(position) = stream_position {
+            estimator.set_stream_position(position);
+        }
+        history.stopped_early = false;
+        while iteration < self.iterations {
+            let position = estimator.stream_position();
             let sigma = self.annealer.sigma(iteration);
-            let estimate = estimator.estimate(&theta, sigma)?;
-            self.adam.step(&mut theta, &estimate.gradient)?;
+            // Adam leaves theta and its moments untouched when it fails, and the estimator
+            // does not touch theta: on either error the state is that of the last good
+            // iteration.
+            let result = estimator
+                .estimate(&theta, sigma)
+                .and_then(|e| self.adam.step(&mut theta, &e.gradient).map(|()| e));
+            let estimate = match result {
+                Ok(estimate) => estimate,
+                Err(error) => {
+                    let state = OptimizerState {
+                        iteration,
+                        theta,
+                        adam: self.adam.moments(),
+                        stream_position: position,
+                        history,
+                    };
+                    return Err(RunError {
+                        error,
+                        state: Box::new(state),
+                    });
+                }
+            };
             history.sigma.push(sigma);
             history.value.push(estimate.mean_value);
             history.evaluations += estimate.evaluations;
-            if self.record_theta || iteration + 1 == self.iterations {
-                history.theta.push(theta.clone());
+            match history.theta.last_mut() {
+                Some(last) if !self.record_theta => last.copy_from_slice(&theta),
+                _ => history.theta.push(theta.clone()),
             }
             let step = Step {
                 iteration,
@@ -157,14 +434,18 @@ impl Optimizer {
                 sigma,
                 estimate: &estimate,
             };
+            iteration += 1;
             if observer(&step).is_break() {
-                history.stopped_early = iteration + 1 < self.iterations;
-                if !self.record_theta && history.stopped_early {
-                    history.theta.push(theta.clone());
-                }
+                history.stopped_early = iteration < self.iterations;
                 break;
             }
         }
-        Ok(history)
+        Ok(OptimizerState {
+            iteration,
+            theta,
+            adam: self.adam.moments(),
+            stream_position: estimator.stream_position(),
+            history,
+        })
     }
 }

@@ -45,6 +45,9 @@ pub(crate) fn stream_rng(seed: u64, estimate: u64, stream: u64) -> Xoshiro256Plu
 /// Separates the objective's seeds from the sampler's streams (stream `k ^ OBJECTIVE` is
 /// pair `k`'s objective seed).
 pub(crate) const OBJECTIVE_STREAM: u64 = 0x8000_0000_0000_0000;
+/// Attempt `a >= 1` of a resampled estimate draws with the seed
+/// `stream_seed(seed, e, RESAMPLE_STREAM ^ a)` in place of `seed`.
+pub(crate) const RESAMPLE_STREAM: u64 = 0x2000_0000_0000_0000;
 /// The stream of an estimate's orthogonal block draw.
 pub(crate) const ORTHOGONAL_STREAM: u64 = 0x4000_0000_0000_0000;
 

@@ -212,7 +212,10 @@ fn objective_returning_nan_or_infinity_names_the_point() {
             }
             let text = err.to_string();
             assert!(text.contains(&format!("evaluation {first_bad}")), "{text}");
-            assert!(text.contains(&format!("{}", seen[first_bad][0])), "{text}");
+            assert!(
+                text.contains(&format!("{:e}", seen[first_bad][0])),
+                "{text}"
+            );
         }
     }
 }
@@ -272,11 +275,18 @@ fn the_loop_stops_at_the_first_bad_value() {
         Adam::new(0.1).unwrap(),
         Annealer::constant(0.01, 100).unwrap(),
     );
-    let err = opt.minimize(&mut est, &[0.0]).unwrap_err();
+    let err = opt
+        .run(&mut est, &[0.0], |_| std::ops::ControlFlow::Continue(()))
+        .unwrap_err();
     assert!(
-        matches!(err, Error::NonFiniteValue { ref point, .. } if point[0] < -0.5),
+        matches!(err.error, Error::NonFiniteValue { ref point, .. } if point[0] < -0.5),
         "{err:?}"
     );
+    // The good iterations are kept, and the state continues from the last good point.
+    let kept = err.history().iterations();
+    assert!(kept > 0 && kept < 100, "{kept}");
+    assert_eq!(err.state.iteration, kept);
+    assert_eq!(err.history().last_theta(), Some(&err.state.theta[..]));
 }
 
 #[test]

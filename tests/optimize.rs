@@ -162,7 +162,8 @@ fn spsa_runs() {
 #[test]
 fn observer_stops_the_run() {
     let mut grad = PlateauFreeGradient::new(tilted_2d).samples(4).seed(1);
-    let mut opt = Optimizer::new(Adam::new(0.02).unwrap(), Annealer::paper(0.5, 50).unwrap());
+    let mut opt = Optimizer::new(Adam::new(0.02).unwrap(), Annealer::paper(0.5, 50).unwrap())
+        .record_theta(true);
     let mut seen = Vec::new();
     let history = opt
         .minimize_with(&mut grad, &[1.0, 1.0], |step| {
@@ -216,7 +217,9 @@ fn history_follows_the_schedule() {
     let annealer = Annealer::paper(0.5, 40).unwrap();
     let mut grad = PlateauFreeGradient::new(tilted_2d).samples(6).seed(2);
     // Ten iterations past the schedule's end: sigma stays at its floor.
-    let mut opt = Optimizer::new(Adam::new(0.02).unwrap(), annealer).iterations(50);
+    let mut opt = Optimizer::new(Adam::new(0.02).unwrap(), annealer)
+        .iterations(50)
+        .record_theta(true);
     let history = opt.minimize(&mut grad, &[1.0, 1.0]).unwrap();
     assert_eq!(history.iterations(), 50);
     assert_eq!(history.theta.len(), 50);
@@ -233,4 +236,35 @@ fn history_follows_the_schedule() {
     grad.reset();
     let again = opt.minimize(&mut grad, &[1.0, 1.0]).unwrap();
     assert_eq!(again, history);
+}
+
+#[test]
+fn memory_does_not_grow_with_iterations_by_default() {
+    let mut grad = PlateauFreeGradient::new(tilted_2d).samples(2).seed(5);
+    let mut opt = Optimizer::new(Adam::new(0.02).unwrap(), Annealer::paper(0.5, 30).unwrap());
+    let history = opt.minimize(&mut grad, &[1.0, 1.0]).unwrap();
+    assert_eq!(history.iterations(), 30);
+    // One point kept, not thirty: the default keeps only the latest theta.
+    assert_eq!(history.theta.len(), 1);
+    // ... and it is the point the run ended at, the same as when every point is recorded.
+    grad.reset();
+    let mut opt = opt.record_theta(true);
+    let full = opt.minimize(&mut grad, &[1.0, 1.0]).unwrap();
+    assert_eq!(full.theta.len(), 30);
+    assert_eq!(history.last_theta(), full.last_theta());
+}
+
+#[test]
+fn zero_iterations_end_at_the_start() {
+    let mut grad = PlateauFreeGradient::new(tilted_2d);
+    for record in [false, true] {
+        let mut opt = Optimizer::new(Adam::new(0.02).unwrap(), Annealer::paper(0.5, 30).unwrap())
+            .iterations(0)
+            .record_theta(record);
+        let history = opt.minimize(&mut grad, &[1.0, 2.0]).unwrap();
+        // The README's `history.last_theta().unwrap()` cannot panic.
+        assert_eq!(history.last_theta().unwrap(), &[1.0, 2.0]);
+        assert_eq!((history.iterations(), history.evaluations), (0, 0));
+    }
+    assert_eq!(grad.estimates_made(), 0);
 }
