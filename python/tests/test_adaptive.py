@@ -206,3 +206,32 @@ def test_exception_from_callback_propagates():
 def test_non_number_is_a_type_error():
     with pytest.raises(TypeError, match="fun must return a real number"):
         plateau.minimize(lambda x: "a", X0, budget=100)
+
+
+def test_keyboard_interrupt_stops_the_adaptive_run_within_one_call():
+    import _thread
+    import threading
+    import time
+
+    count = [0]
+
+    def fun(x):
+        count[0] += 1
+        if count[0] == 5:
+            _thread.interrupt_main()
+        return staircase(x)
+
+    with pytest.raises(KeyboardInterrupt):
+        plateau.minimize(fun, X0, budget=10**6)
+    assert count[0] <= 6
+
+    # `sum` runs no bytecode: only the check before each call of fun sees the signal.
+    timer = threading.Timer(0.3, _thread.interrupt_main)
+    start = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            plateau.minimize(sum, [0.5, 0.5], budget=10**9, bounds=(-1.0, 1.0))  # finite points
+    finally:
+        timer.cancel()
+    assert time.perf_counter() - start < 5.0
