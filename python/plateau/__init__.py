@@ -12,7 +12,9 @@ runs in Rust with the GIL released; ``fun`` is called back with the GIL held.
 The main entry points:
 
 - :class:`PlateauFreeGradient` -- ``PlateauFreeGradient(fun).estimate(x, sigma)``.
-- :func:`minimize` -- the optimisation loop; returns an :class:`OptimizeResult`.
+- :func:`minimize` -- ``minimize(fun, x0, budget=...)`` runs the library's general-purpose
+  search (``plateau::Minimizer``); with ``sigma0``/``lr``/``iterations``, or
+  ``method='plateau'``, the paper's loop. Returns an :class:`OptimizeResult`.
 - :class:`Annealer` (``paper``, ``constant``, ``exponential``, ``cosine``), :class:`Adam`
   (with bounds), :class:`Sampling` (``Radial``, ``PerCoordinate``, ``Gaussian``).
 - :class:`FiniteDifference`, :class:`Spsa` -- the baselines (also in ``plateau.baseline``).
@@ -83,21 +85,29 @@ class OptimizeResult(dict):
     Attributes
     ----------
     x : numpy.ndarray
-        The parameters after the last iteration, shaped like ``x0``.
+        ``method='adaptive'``: the best point seen. The paper's loop: the parameters after the
+        last iteration. Shaped like ``x0``.
     fun : float
-        ``fun(x)``, evaluated once after the run (see ``final_evaluation``).
+        ``fun(x)``: the best value seen (adaptive), or evaluated once after the run (the paper's
+        loop, see ``final_evaluation``).
     nit : int
         Iterations completed.
     nfev : int
         Evaluations of ``fun`` in all, the final one included.
     success : bool
-        Whether the run ended normally (all iterations, or stopped by the callback).
+        Whether the run ended normally (always True; failures raise).
     status : int
-        0: all iterations done; 1: stopped by the callback.
+        The paper's loop: 0 all iterations done, 1 stopped by the callback. Adaptive: 0 budget
+        spent, 1 stopped by the callback, 2 target reached, 3 converged (``restarts=False``).
     message : str
-        What happened, in words.
-    history : History
-        Per-iteration records.
+        What happened, in words (adaptive: the stop reason, ``'budget spent'``,
+        ``'target reached'``, ``'converged'`` or ``'stopped by the callback'``).
+    restarts : int or None
+        Adaptive only: restarts of the search distribution (None when stopped by the callback).
+    sigma : float or None
+        Adaptive only: the spread at the end (None when stopped by the callback).
+    history : History or None
+        The paper's loop: per-iteration records. Adaptive: None.
     """
 
     def __getattr__(self, name: str) -> Any:
@@ -207,28 +217,39 @@ def minimize(
     fun: Callable[..., Any],
     x0: Any,
     *,
-    sigma0: float = 0.5,
+    budget: Optional[int] = None,
+    sigma0: Optional[float] = None,
     iterations: Optional[int] = None,
-    lr: float = 0.02,
-    samples: int = 2,
-    sampling: str = "radial",
-    antithetic: bool = True,
+    lr: Optional[float] = None,
+    samples: Optional[int] = None,
+    sampling: Optional[str] = None,
+    antithetic: Optional[bool] = None,
     seed: int = 0,
     bounds: Any = None,
-    annealer: Any = "paper",
-    sigma_min: float = PAPER_SIGMA_MIN,
+    annealer: Any = None,
+    sigma_min: Optional[float] = None,
     batched: bool = False,
     seeded: bool = False,
     callback: Optional[Callable[..., Any]] = None,
-    budget: Optional[int] = None,
-    method: str = "plateau",
-    step: float = 1e-3,
-    orthogonal: bool = False,
-    parallel: bool = False,
-    record_x: bool = False,
-    final_evaluation: bool = True,
+    method: Optional[str] = None,
+    target: Optional[float] = None,
+    population: Optional[int] = None,
+    restarts: bool = True,
+    step: Optional[float] = None,
+    orthogonal: Optional[bool] = None,
+    parallel: Optional[bool] = None,
+    record_x: Optional[bool] = None,
+    final_evaluation: Optional[bool] = None,
 ) -> OptimizeResult:
-    """Minimise ``fun`` from ``x0`` with the plateau-free gradient, Adam and an annealed sigma.
+    """Minimise ``fun`` from ``x0``: ``minimize(fun, x0, budget=...)`` is the first thing to try.
+
+    Two methods. ``'adaptive'`` (the default when ``budget`` is given and none of ``sigma0``,
+    ``lr``, ``iterations`` is) is the library's general-purpose search, ``plateau::minimize`` /
+    ``plateau::Minimizer``: a Gaussian search distribution around a mean, ranked values, a
+    spread and metric that adapt to ``fun`` (and grow on plateaus), restarts from the best point
+    with a doubled population; no step size or learning rate to choose. It returns the best
+    point seen. ``'plateau'`` (the default otherwise) is the paper's loop: the plateau-free
+    gradient, Adam and an annealed sigma; it returns the last iterate.
 
     Parameters
     ----------
@@ -239,20 +260,31 @@ def minimize(
         ``fun(X, seeds)`` when also seeded (``seeds``: ``uint64`` array of length ``N``).
     x0 : array_like
         The start; finite, at least one element.
-    sigma0 : float
-        The initial spread (the paper recommends about half the parameter domain).
+    budget : int, optional
+        A total number of evaluations of ``fun`` (at least 1). Adaptive: the run spends at most
+        this many (default ``1000 * x0.size``). The paper's loop: it sets the number of
+        iterations, ``budget // samples`` (``// 2n`` for finite differences).
+    sigma0 : float, optional
+        The initial spread. Adaptive: default a quarter of the mean box width with ``bounds``,
+        else ``max(1, max|x0|) / 2``; it adapts from there. The paper's loop: default 0.5 (the
+        paper recommends about half the parameter domain); giving it selects the paper's loop
+        unless ``method='adaptive'``.
     iterations : int, optional
         Iterations to run; default: the annealer's length if ``annealer`` is an
         :class:`Annealer`, ``budget // evaluations per iteration`` if ``budget`` is given,
         else 400.
-    lr : float
-        Adam's learning rate.
-    samples, sampling, antithetic, seed, orthogonal, parallel
-        As for :class:`PlateauFreeGradient`.
+    lr : float, optional
+        Adam's learning rate (the paper's loop; default 0.02).
+    seed : int
+        The seed of every random choice: the result is a function of ``fun``, ``x0``, the
+        options and the seed alone (adaptive: bit for bit the Rust ``Minimizer``'s).
+    samples, sampling, antithetic, orthogonal, parallel
+        As for :class:`PlateauFreeGradient` (the paper's loop).
     bounds : optional
-        Box bounds, applied by projection after every step: a sequence of ``(lower, upper)``
-        pairs, one per coordinate (``None`` for no bound), one ``(lower, upper)`` pair for all
-        coordinates, or a ``scipy.optimize.Bounds``.
+        Box bounds: a sequence of ``(lower, upper)`` pairs, one per coordinate (``None`` for no
+        bound), one ``(lower, upper)`` pair for all coordinates, or a
+        ``scipy.optimize.Bounds``. The paper's loop projects after every step; adaptive
+        projects every evaluated point onto the box (finite bounds only, ``x0`` inside).
     annealer : str or Annealer
         ``'paper'`` (sigma0 for half the run, then linear to ``sigma_min``), ``'constant'``,
         ``'exponential'``, ``'cosine'``, or an :class:`Annealer` (then ``sigma0`` and
@@ -260,19 +292,33 @@ def minimize(
     sigma_min : float
         The final spread of the decaying schedules (the paper's 0.01).
     batched, seeded : bool
-        The form of ``fun`` (see above).
+        The form of ``fun`` (see above). Adaptive: a batched ``fun`` is called once per
+        iteration with the iteration's whole population; a seeded one gets the same seed for
+        every point of an iteration (common random numbers), a new one each iteration.
     callback : callable, optional
-        Called after every iteration, as in scipy: ``callback(intermediate_result)`` (an
-        :class:`OptimizeResult` with ``x``, ``fun`` -- the iteration's mean value --,
-        ``nit``, ``nfev``, ``sigma``, ``jac`` -- the gradient estimate) when its only
-        parameter is named ``intermediate_result``, else ``callback(x)``. Returning ``True``
-        stops the run.
-    budget : int, optional
-        A total number of evaluations of ``fun``. For now it sets the number of iterations of
-        the paper's schedule (``budget // samples``, ``// 2n`` for finite differences).
-    method : str
-        ``'plateau'`` (default), or a baseline on the same loop: ``'fd'`` (central finite
-        differences of step ``step``) or ``'spsa'``.
+        Called after every iteration, as in scipy: ``callback(intermediate_result)`` when its
+        only parameter is named ``intermediate_result``, else ``callback(x)``. Returning
+        ``True`` stops the run. The paper's loop: an :class:`OptimizeResult` with ``x``,
+        ``fun`` -- the iteration's mean value --, ``nit``, ``nfev``, ``sigma``, ``jac`` -- the
+        gradient estimate. Adaptive: ``x`` and ``fun`` are the best point and value so far,
+        with ``nit`` and ``nfev``.
+    method : str, optional
+        ``'adaptive'`` (the default with ``budget`` and none of ``sigma0``, ``lr``,
+        ``iterations``), ``'plateau'`` (the paper's loop; the default otherwise), or a baseline
+        on the paper's loop: ``'fd'`` (central finite differences of step ``step``) or
+        ``'spsa'``. The options of the paper's loop alone (``iterations``, ``lr``,
+        ``samples``, ``sampling``, ``antithetic``, ``annealer``, ``sigma_min``, ``step``,
+        ``orthogonal``, ``parallel``, ``record_x``, ``final_evaluation``) default to None, which
+        means the paper loop's default; giving any of them, or ``sigma0``, selects the paper's
+        loop when ``method`` is not given, and is a ValueError with ``method='adaptive'``.
+    target : float, optional
+        Adaptive: stop as soon as ``fun`` reaches ``target`` or below.
+    population : int, optional
+        Adaptive: the population of the first run (default ``4 + floor(3 ln n)``, at least 2);
+        each restart doubles it.
+    restarts : bool
+        Adaptive: restart from the best point with a doubled population when a run converges or
+        stalls while budget remains (default). Off, the run ends with ``'converged'``.
     record_x : bool
         Keep ``x`` after every iteration in ``history.x``.
     final_evaluation : bool
@@ -282,13 +328,14 @@ def minimize(
     Returns
     -------
     OptimizeResult
-        ``x``, ``fun``, ``nit``, ``nfev``, ``success``, ``status``, ``message``, ``history``.
+        ``x``, ``fun``, ``nit``, ``nfev``, ``success``, ``status``, ``message``, ``history``;
+        adaptive: also ``restarts`` and ``sigma``, and ``history`` is None.
 
     Raises
     ------
     ValueError
-        Bad input (non-finite or empty ``x0``, sigma <= 0, samples 0, odd samples with
-        antithetic pairs, bounds with lower > upper, ...), or ``fun`` returning NaN or an
+        Bad input (non-finite or empty ``x0``, budget < 1, sigma <= 0, samples 0, odd samples
+        with antithetic pairs, bounds with lower > upper, ``x0`` outside the bounds, ...), or ``fun`` returning NaN or an
         infinity, or a batch of the wrong length.
     TypeError
         ``fun`` returning something that is not a number.
@@ -297,7 +344,60 @@ def minimize(
         stops the run within one call of ``fun``).
     """
     x0_array = np.asarray(x0, dtype=np.float64)
+    if budget is not None and (isinstance(budget, bool) or int(budget) != budget or budget < 1):
+        raise ValueError(f"budget = {budget!r} must be a whole number of evaluations, at least 1")
+    # The options of the paper's loop alone (None: not given; the defaults are below).
+    paper_only = {
+        "iterations": iterations,
+        "lr": lr,
+        "samples": samples,
+        "sampling": sampling,
+        "antithetic": antithetic,
+        "annealer": annealer,
+        "sigma_min": sigma_min,
+        "step": step,
+        "orthogonal": orthogonal,
+        "parallel": parallel,
+        "record_x": record_x,
+        "final_evaluation": final_evaluation,
+    }
+    if method is None:
+        paper = sigma0 is not None or any(v is not None for v in paper_only.values())
+        method = "adaptive" if budget is not None and not paper else "plateau"
     method = method.lower()
+    if method == "adaptive":
+        given = [name for name, value in paper_only.items() if value is not None]
+        if given:
+            raise ValueError(
+                f"{', '.join(given)}: options of the paper's loop, not of method='adaptive' "
+                "(use budget, or method='plateau')"
+            )
+        return _minimize_adaptive(
+            fun,
+            x0_array,
+            budget=budget,
+            seed=seed,
+            sigma0=sigma0,
+            bounds=bounds,
+            target=target,
+            population=population,
+            restarts=restarts,
+            batched=batched,
+            seeded=seeded,
+            callback=callback,
+        )
+    sigma0 = 0.5 if sigma0 is None else sigma0
+    lr = 0.02 if lr is None else lr
+    samples = 2 if samples is None else samples
+    sampling = "radial" if sampling is None else sampling
+    antithetic = True if antithetic is None else antithetic
+    annealer = "paper" if annealer is None else annealer
+    sigma_min = PAPER_SIGMA_MIN if sigma_min is None else sigma_min
+    step = 1e-3 if step is None else step
+    orthogonal = False if orthogonal is None else orthogonal
+    parallel = False if parallel is None else parallel
+    record_x = False if record_x is None else record_x
+    final_evaluation = True if final_evaluation is None else final_evaluation
     if method == "plateau":
         estimator: Any = PlateauFreeGradient(
             fun,
@@ -318,7 +418,9 @@ def minimize(
         estimator = Spsa(fun, seed=seed, batched=batched, seeded=seeded)
         per_iteration = 2
     else:
-        raise ValueError(f"method = {method!r} is not a method: use 'plateau', 'fd' or 'spsa'")
+        raise ValueError(
+            f"method = {method!r} is not a method: use 'adaptive', 'plateau', 'fd' or 'spsa'"
+        )
 
     if iterations is None:
         if isinstance(annealer, Annealer):
@@ -387,6 +489,74 @@ def minimize(
         status=status,
         message=message,
         history=history,
+    )
+
+
+_STOP_STATUS = {"budget spent": 0, "callback": 1, "target reached": 2, "converged": 3}
+
+
+def _minimize_adaptive(
+    fun: Callable[..., Any],
+    x0: np.ndarray,
+    *,
+    budget: Optional[int],
+    seed: int,
+    sigma0: Optional[float],
+    bounds: Any,
+    target: Optional[float],
+    population: Optional[int],
+    restarts: bool,
+    batched: bool,
+    seeded: bool,
+    callback: Optional[Callable[..., Any]],
+) -> OptimizeResult:
+    """``method='adaptive'``: the Rust ``plateau::Minimizer``."""
+    raw_callback = None
+    if callback is not None:
+        as_result = _wants_intermediate_result(callback)
+
+        def raw_callback(nit, x, value, nfev):  # type: ignore[no-untyped-def]
+            if as_result:
+                return callback(OptimizeResult(x=x, fun=value, nit=nit, nfev=nfev)) is True
+            return callback(x) is True
+
+    box = None
+    if bounds is not None:
+        box = _parse_bounds(bounds, x0.shape)
+        for i, (lo, hi) in enumerate(zip(*box)):
+            if not (math.isfinite(lo) and math.isfinite(hi)):
+                raise ValueError(
+                    f"bounds[{i}] = ({lo}, {hi}): method='adaptive' needs finite bounds "
+                    "(the box sets the starting spread and where restarts go)"
+                )
+    raw = _plateau._minimize_adaptive(
+        fun,
+        x0,
+        budget=None if budget is None else int(budget),
+        seed=seed,
+        sigma0=sigma0,
+        bounds=box,
+        target=target,
+        population=population,
+        restarts=restarts,
+        batched=batched,
+        seeded=seeded,
+        callback=raw_callback,
+    )
+    stop = raw["stop"]
+    nit = int(raw["nit"])
+    message = f"stopped by the callback after iteration {nit}" if stop == "callback" else stop
+    return OptimizeResult(
+        x=raw["x"],
+        fun=float(raw["fun"]),
+        nit=nit,
+        nfev=int(raw["nfev"]),
+        success=True,
+        status=_STOP_STATUS[stop],
+        message=message,
+        restarts=raw["restarts"],
+        sigma=raw["sigma"],
+        history=None,
     )
 
 

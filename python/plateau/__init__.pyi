@@ -188,7 +188,8 @@ class History:
     def __len__(self) -> int: ...
 
 class OptimizeResult(dict[str, Any]):
-    """The fields of ``scipy.optimize.OptimizeResult``, and ``history``."""
+    """The fields of ``scipy.optimize.OptimizeResult``, and ``history``; with
+    ``method='adaptive'`` also ``restarts`` and ``sigma`` (``history`` is then None)."""
 
     x: _FloatArray
     fun: float
@@ -197,7 +198,9 @@ class OptimizeResult(dict[str, Any]):
     success: bool
     status: int
     message: str
-    history: History
+    history: Optional[History]
+    restarts: Optional[int]
+    sigma: Optional[float]
     def __getattr__(self, name: str) -> Any: ...
 
 _Bounds = Union[
@@ -210,28 +213,39 @@ def minimize(
     fun: Callable[..., Any],
     x0: _ArrayLike,
     *,
-    sigma0: float = 0.5,
+    budget: Optional[int] = None,
+    sigma0: Optional[float] = None,
     iterations: Optional[int] = None,
-    lr: float = 0.02,
-    samples: int = 2,
-    sampling: _SamplingName = "radial",
-    antithetic: bool = True,
+    lr: Optional[float] = None,
+    samples: Optional[int] = None,
+    sampling: Optional[_SamplingName] = None,
+    antithetic: Optional[bool] = None,
     seed: int = 0,
     bounds: Optional[_Bounds] = None,
-    annealer: Union[_ScheduleName, Annealer] = "paper",
-    sigma_min: float = 0.01,
+    annealer: Union[_ScheduleName, Annealer, None] = None,
+    sigma_min: Optional[float] = None,
     batched: bool = False,
     seeded: bool = False,
     callback: Optional[Callable[..., Any]] = None,
-    budget: Optional[int] = None,
-    method: Literal["plateau", "fd", "spsa"] = "plateau",
-    step: float = 1e-3,
-    orthogonal: bool = False,
-    parallel: bool = False,
-    record_x: bool = False,
-    final_evaluation: bool = True,
+    method: Optional[Literal["adaptive", "plateau", "fd", "spsa"]] = None,
+    target: Optional[float] = None,
+    population: Optional[int] = None,
+    restarts: bool = True,
+    step: Optional[float] = None,
+    orthogonal: Optional[bool] = None,
+    parallel: Optional[bool] = None,
+    record_x: Optional[bool] = None,
+    final_evaluation: Optional[bool] = None,
 ) -> OptimizeResult:
-    """Minimise ``fun`` from ``x0`` with the plateau-free gradient, Adam and an annealed sigma."""
+    """Minimise ``fun`` from ``x0``. ``minimize(fun, x0, budget=...)`` runs the library's
+    general-purpose search (``method='adaptive'``, the Rust ``plateau::Minimizer``; the
+    default when ``budget`` is given and no option of the paper's loop is) and returns the best
+    point seen; otherwise (or ``method='plateau'``) the paper's loop: the plateau-free
+    gradient, Adam and an annealed sigma. ``None`` for an option of the paper's loop means its
+    default (``sigma0=0.5``, ``lr=0.02``, ``samples=2``, ``sampling='radial'``,
+    ``antithetic=True``, ``annealer='paper'``, ``sigma_min=0.01``, ``step=1e-3``,
+    ``orthogonal=False``, ``parallel=False``, ``record_x=False``,
+    ``final_evaluation=True``)."""
 
 __all__ = [
     "PAPER_SIGMA_MIN",

@@ -19,8 +19,10 @@ __all__ = [
     "PlateauFreeGradient",
     "Spsa",
     "_minimize",
+    "_minimize_adaptive",
     "_rust_reference_estimates",
     "_rust_reference_minimize",
+    "_rust_reference_minimize_adaptive",
     "_rust_seconds_per_evaluation",
 ]
 
@@ -32,6 +34,20 @@ def _minimize(
     iterations: int | None = None,
     callback: Any = None,
     record_x: bool = False,
+) -> dict[str, Any]: ...
+def _minimize_adaptive(
+    fun: Any,
+    x0: Any,
+    budget: int | None = None,
+    seed: int = 0,
+    sigma0: float | None = None,
+    bounds: tuple[list[float], list[float]] | None = None,
+    target: float | None = None,
+    population: int | None = None,
+    restarts: bool = True,
+    batched: bool = False,
+    seeded: bool = False,
+    callback: Any = None,
 ) -> dict[str, Any]: ...
 def _rust_reference_estimates(
     x: Any,
@@ -52,4 +68,12 @@ def _rust_reference_minimize(
     samples: int = 2,
     seed: int = 0,
 ) -> Any: ...
+def _rust_reference_minimize_adaptive(
+    x0: Any,
+    budget: int | None = None,
+    seed: int = 0,
+    sigma0: float | None = None,
+    bounds: tuple[list[float], list[float]] | None = None,
+    seeded: bool = False,
+) -> dict[str, Any]: ...
 def _rust_seconds_per_evaluation(dim: int = 10, samples: int = 10000, repeats: int = 5) -> float: ...

@@ -30,3 +30,28 @@ def tilted_step_gradient(a, b, theta, spreads):
     s = np.sqrt(np.sum(a * a * np.asarray(spreads, dtype=float) ** 2))
     z = (a @ np.asarray(theta, dtype=float) - b) / s
     return a * phi(z) / s
+
+
+STAIR_TARGET = (1.0, -2.0, 3.0)
+
+
+def staircase(x):
+    """The same arithmetic, in the same order, as `staircase` in python/src/lib.rs: the squared
+    distance of the rounded point (floor(v + 0.5)) to the integer target (1, -2, 3, 1, ...)."""
+    total = 0.0
+    for i, v in enumerate(np.ravel(x)):
+        d = math.floor(float(v) + 0.5) - STAIR_TARGET[i % 3]
+        total += d * d
+    return total
+
+
+def staircase_seeded(x, seed):
+    return staircase(x) + (int(seed) % 1000) * 1e-3
+
+
+def staircase_batch(xs):
+    """`staircase` of every row of a (N, 3) array, vectorised, with the same rounding and the
+    same order of additions ((d0^2 + d1^2) + d2^2, as 0.0 + d0^2 is d0^2)."""
+    d = np.floor(xs + 0.5) - np.asarray(STAIR_TARGET)
+    sq = d * d
+    return (sq[:, 0] + sq[:, 1]) + sq[:, 2]
