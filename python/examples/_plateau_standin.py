@@ -75,9 +75,9 @@ def minimize(fun, x0, *, sigma0, iterations, lr, samples=2, sampling="radial", s
         x = x - lr * mh / (np.sqrt(vh) + eps)
         if bounds is not None:
             x = np.clip(x, bounds[0], bounds[1])
-        history.append(SimpleNamespace(iteration=t, sigma=sigma, loss=float(np.mean(values)), x=x.copy()))
-        if callback is not None and callback(history[-1]) is False:
+        history.append(SimpleNamespace(nit=t + 1, sigma=sigma, fun=float(np.mean(values)), x=x.copy(), nfev=nfev))
+        if callback is not None and callback(history[-1]) is True:
             break
-    return SimpleNamespace(x=x, fun=history[-1].loss if history else float("nan"), nit=len(history),
+    return SimpleNamespace(x=x, fun=history[-1].fun if history else float("nan"), nit=len(history),
                            nfev=nfev, success=True, message="iterations done (numpy stand-in)",
                            history=history)

@@ -165,15 +165,32 @@ def run_plateau(mi, args, seed: int, out: Path) -> dict:
         def fun(x):
             return record(x, ms.image_mse(scene.render(x, seed), reference))
 
+    # The iterates, from plateau's scipy-style callback (x after the step, sigma, the
+    # iteration's mean value); the time is the optimisation's (renders, estimator, Adam).
+    steps: list[dict] = []
+
+    def callback(intermediate_result):
+        r = intermediate_result
+        steps.append({"x": np.array(r.x, dtype=np.float64), "sigma": float(getattr(r, "sigma", float("nan"))),
+                      "seconds": time.perf_counter() - t0[0]})
+        k = len(steps)
+        if args.progress and (k % args.progress == 0 or k == args.iterations):
+            print(f"  seed {seed} iteration {k}: param MSE {ms.param_mse(steps[-1]['x']):.3e}, "
+                  f"sigma {steps[-1]['sigma']:.3f}, {steps[-1]['seconds'] / k:.2f} s/iteration",
+                  file=sys.stderr, flush=True)
+
     t0[0] = time.perf_counter()
     result = minimize(fun, np.array(ms.START, dtype=np.float64), sigma0=args.sigma0,
                       iterations=args.iterations, lr=args.lr, samples=args.samples,
-                      sampling="radial", seed=seed, seeded=(args.crn == "pair"))
-    seconds_total = time.perf_counter() - t0[0]
-    nit = int(getattr(result, "nit", args.iterations)) or args.iterations
+                      sampling="radial", seed=seed, seeded=(args.crn == "pair"), callback=callback)
+    nit = int(getattr(result, "nit", len(steps))) or len(steps)
+    # Optimisation time: up to the last iteration's step (plateau.minimize evaluates fun once
+    # more at the end for result.fun; that render is not part of an iteration).
+    seconds_total = steps[-1]["seconds"] if steps else time.perf_counter() - t0[0]
     final_theta = np.asarray(result.x, dtype=np.float64)
 
-    # The iterates: with antithetic pairs the N points of an iteration average to its theta.
+    # history.csv: row k is iteration k's renders (at the theta before its step: the mean of
+    # its antithetic points), its sigma and loss (their mean image MSE).
     n = args.samples
     rows = []
     for k in range(min(nit, len(calls) // n)):
@@ -181,11 +198,11 @@ def run_plateau(mi, args, seed: int, out: Path) -> dict:
         theta = np.mean([g[0] for g in group], axis=0)
         rows.append({
             "iteration": k,
-            "sigma": paper_sigma(args.sigma0, args.iterations, k),
+            "sigma": steps[k]["sigma"] if k < len(steps) else paper_sigma(args.sigma0, args.iterations, k),
             "loss": float(np.mean([g[1] for g in group])),
             "param_mse": ms.param_mse(theta),
             "image_mse": None,
-            "seconds": group[-1][2],
+            "seconds": steps[k]["seconds"] if k < len(steps) else group[-1][2],
             "theta0": float(theta[0]),
             "theta1": float(theta[1]),
         })
@@ -535,24 +552,29 @@ def main(argv=None) -> int:
                    help="Mitsuba's differentiable integrator (direct_projective, prb_projective, ...)")
     p.add_argument("--ad-iterations", type=int, default=20, help="Mitsuba AD iterations (0: none)")
     p.add_argument("--ad-seconds", type=float, default=0, help="stop Mitsuba AD after this many seconds (0: no limit)")
+    p.add_argument("--ad-only", action="store_true", help="only Mitsuba's AD run, into OUT/ad (with --seeds: seed 0's renders)")
     p.add_argument("--variant", default="llvm_ad_rgb")
+    p.add_argument("--progress", type=int, default=50, help="print progress every K iterations (0: never)")
     p.add_argument("--standin", action="store_true",
                    help="use the numpy stand-in optimiser if the plateau package is not installed")
     args = p.parse_args(argv)
 
     out = Path(args.out)
+    seeds = list(range(args.seeds))
     if args.seeds and args.page_only:
-        write_page(args, out, list(range(args.seeds)))
+        merge_ad(None, args, out, seeds)
+        write_page(args, out, seeds)
         return 0
     mi = ms.load_mitsuba(args.variant)
+    if args.ad_only:
+        run_study_ad(mi, args, out, seeds or [args.seed], force=True)
+        return 0
     if not args.seeds:
         s = run_one(mi, args, args.seed, out, None)
         print(json.dumps({k: s[k] for k in ("param_mse", "image_mse", "seconds_per_iteration",
                                              "mitsuba_ad_param_mse") if k in s}))
         return 0
-    seeds = list(range(args.seeds))
-    ad_dir = out / "ad"
-    ad_file = ad_dir / "summary.json"
+    ad_file = out / "ad" / "summary.json"
     ad = json.loads(ad_file.read_text()) if ad_file.exists() and not args.force else None
     # plateau per seed first (the goal), then Mitsuba's AD once (from the same start, seed 0's
     # renders), whose figures then go into every seed's summary.
@@ -564,21 +586,46 @@ def main(argv=None) -> int:
         run_one(mi, args, s, d, ad_keys(ad) if ad else {})
         write_page(args, out, seeds)
     if ad is None and args.ad_iterations > 0:
-        ad_dir.mkdir(parents=True, exist_ok=True)
-        print(f"Mitsuba AD ({args.ad_integrator}), at most {args.ad_iterations} iterations -> {ad_dir}",
-              file=sys.stderr, flush=True)
-        ad = run_ad(mi, args, seeds[0], ad_dir)
-        ad["initial_param_mse"] = ms.param_mse(ms.START)
-        ad_file.write_text(json.dumps({**settings(args, seeds[0]), **ad}, indent=2) + "\n")
-    if ad:
-        for s in seeds:
-            f = out / f"seed-{s}" / "summary.json"
-            if f.exists():
-                summary = {**json.loads(f.read_text()), **ad_keys(ad)}
-                f.write_text(json.dumps(summary, indent=2) + "\n")
-                replot(mi, args, f.parent, summary)
+        run_study_ad(mi, args, out, seeds, force=args.force)
+    merge_ad(mi, args, out, seeds)
     write_page(args, out, seeds)
     return 0
+
+
+def run_study_ad(mi, args, out: Path, seeds: list[int], force: bool) -> dict:
+    ad_dir = out / "ad"
+    ad_file = ad_dir / "summary.json"
+    if ad_file.exists() and not force:
+        return json.loads(ad_file.read_text())
+    ad_dir.mkdir(parents=True, exist_ok=True)
+    print(f"Mitsuba AD ({args.ad_integrator}), at most {args.ad_iterations} iterations -> {ad_dir}",
+          file=sys.stderr, flush=True)
+    ad = run_ad(mi, args, seeds[0], ad_dir)
+    ad["initial_param_mse"] = ms.param_mse(ms.START)
+    ad_file.write_text(json.dumps({**settings(args, seeds[0]), **ad}, indent=2) + "\n")
+    return ad
+
+
+def merge_ad(mi, args, out: Path, seeds: list[int]) -> None:
+    """Puts the AD run's figures (OUT/ad/summary.json) into every seed's summary.json."""
+    ad_file = out / "ad" / "summary.json"
+    if not ad_file.exists():
+        return
+    keys = ad_keys(json.loads(ad_file.read_text()))
+    for s in seeds:
+        f = out / f"seed-{s}" / "summary.json"
+        if f.exists():
+            summary = {**json.loads(f.read_text()), **keys}
+            f.write_text(json.dumps(summary, indent=2) + "\n")
+            if mi is not None:
+                replot(mi, args, f.parent, summary)
+            else:
+                replot(SimpleMi(summary.get("mitsuba_version", "3")), args, f.parent, summary)
+
+
+class SimpleMi:
+    def __init__(self, version):
+        self.__version__ = version
 
 
 if __name__ == "__main__":
