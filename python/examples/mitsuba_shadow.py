@@ -338,6 +338,8 @@ def run_one(mi, args, seed: int, out: Path, ad: dict | None) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     summary = settings(args, seed)
     summary["mitsuba_version"] = mi.__version__
+    summary["load_average_at_start"] = os.getloadavg()[0]
+    summary["cpus"] = os.cpu_count()
     print(f"seed {seed}: plateau on Mitsuba, {args.iterations} iterations -> {out}", file=sys.stderr, flush=True)
     summary.update(run_plateau(mi, args, seed, out))
     print(f"seed {seed}: parameter MSE {summary['param_mse']:.3e}, "
@@ -485,6 +487,13 @@ def write_page(args, out: Path, seeds: list[int]) -> Path:
         L += [f"Seconds per iteration (N = 2 renders; 2 CPU cores shared with other work): Mitsuba median "
               f"{sorted(spi)[len(spi) // 2]:.2f}" + (f", ours median {sorted(ospi)[len(ospi) // 2]:.3f}" if ospi else "")
               + ". Paper (GPU): 0.04 for its estimator, 0.64 for Mitsuba's gradient.", ""]
+    timing = out / "render_timing.json"
+    if timing.exists():
+        t = json.loads(timing.read_text())
+        L += [f"One Mitsuba render at {t['width']}x{t['height']}, {t['spp']} spp on this machine "
+              f"({t['cpus']} cores, load average {t['load_average'][0]:.1f} while measuring): "
+              f"{t['seconds_per_render']:.2f} s (`--time-renders {t['renders']}`, "
+              f"`{os.path.relpath(timing, REPO)}`).", ""]
     L += ["## Mitsuba's own gradient from the same start", ""]
     if ad:
         L += [f"`{ad['mitsuba_ad_integrator']}` with Adam at LR {ad['mitsuba_ad_lr']}, "
@@ -552,6 +561,8 @@ def main(argv=None) -> int:
                    help="Mitsuba's differentiable integrator (direct_projective, prb_projective, ...)")
     p.add_argument("--ad-iterations", type=int, default=20, help="Mitsuba AD iterations (0: none)")
     p.add_argument("--ad-seconds", type=float, default=0, help="stop Mitsuba AD after this many seconds (0: no limit)")
+    p.add_argument("--time-renders", type=int, default=0,
+                   help="only time K renders at the run's resolution and spp, into OUT/render_timing.json")
     p.add_argument("--ad-only", action="store_true", help="only Mitsuba's AD run, into OUT/ad (with --seeds: seed 0's renders)")
     p.add_argument("--variant", default="llvm_ad_rgb")
     p.add_argument("--progress", type=int, default=50, help="print progress every K iterations (0: never)")
@@ -568,6 +579,12 @@ def main(argv=None) -> int:
     mi = ms.load_mitsuba(args.variant)
     if args.ad_only:
         run_study_ad(mi, args, out, seeds or [args.seed], force=True)
+        return 0
+    if args.time_renders:
+        out.mkdir(parents=True, exist_ok=True)
+        t = time_renders(mi, args, args.time_renders)
+        (out / "render_timing.json").write_text(json.dumps(t, indent=2) + "\n")
+        print(json.dumps(t))
         return 0
     if not args.seeds:
         s = run_one(mi, args, args.seed, out, None)
@@ -590,6 +607,22 @@ def main(argv=None) -> int:
     merge_ad(mi, args, out, seeds)
     write_page(args, out, seeds)
     return 0
+
+
+def time_renders(mi, args, k: int) -> dict:
+    """Seconds per Mitsuba render of the scene at the run's resolution and spp (after one
+    render that compiles the kernels), and the machine's load while measuring."""
+    scene = ms.ShadowScene(mi, spp=args.spp, scale=args.scale)
+    scene.render(ms.START, 0)
+    load0 = os.getloadavg()[0]
+    t = time.perf_counter()
+    for i in range(k):
+        scene.render(ms.START if i % 2 else ms.TARGET, i)
+    per = (time.perf_counter() - t) / k
+    img = scene.render(ms.START, 0)
+    return {"seconds_per_render": per, "renders": k, "width": int(img.shape[1]), "height": int(img.shape[0]),
+            "spp": args.spp, "cpus": os.cpu_count(), "load_average": [load0, os.getloadavg()[0]],
+            "mitsuba_version": mi.__version__, "variant": args.variant}
 
 
 def run_study_ad(mi, args, out: Path, seeds: list[int], force: bool) -> dict:
