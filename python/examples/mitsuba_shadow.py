@@ -481,6 +481,18 @@ def write_page(args, out: Path, seeds: list[int]) -> Path:
                  f"{fmt(o.get('seconds_per_iteration'))} | {o.get('source', 'not in docs/results')} |")
     L += ["", f"At or below the paper's parameter MSE (1.81e-3): **Mitsuba {n_mi} of {len(runs)}** seeds run, "
           f"ours {n_ours} of {sum(1 for s in seeds if s in ours)}. Goal of issue 13: at least 4 of 5 on Mitsuba.", ""]
+    fail_mi = sorted(s for s in seeds if s in runs and runs[s].get("param_mse", 0) > PAPER_PARAM_MSE)
+    fail_ours = sorted(s for s in seeds if s in ours and ours[s]["param_mse"] > PAPER_PARAM_MSE)
+    if fail_mi and all(s in ours for s in seeds if s in runs):
+        same = fail_mi == sorted(s for s in fail_ours if s in runs)
+        L += [f"Seeds that miss it: Mitsuba {fail_mi}, ours {fail_ours}" + (
+              " -- the same seeds on both backbones. A seed fixes the perturbations (the crate's random "
+              "numbers are the same whichever renderer is called), and on both renderers these draws fail "
+              "in the way docs/tasks.md (SHADOW) describes: N = 2 estimates are mostly zero on the plateau, "
+              "the shadow does not reach the target while sigma is large, and once sigma shrinks the "
+              "nearest way down pushes it out of the frame. The paper's setting, not the renderer, decides "
+              "these runs; more evaluations per estimate (Fig. 2's N = 4 reached the target on both seeds "
+              "tried on our renderer) is the remedy to try." if same else "."), ""]
     spi = [r["seconds_per_iteration"] for r in runs.values()]
     ospi = [o["seconds_per_iteration"] for o in ours.values()]
     if spi:
