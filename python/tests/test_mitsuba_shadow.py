@@ -98,7 +98,8 @@ def test_short_run_writes_everything(tmp_path):
     s = json.loads((out / "summary.json").read_text())
     for k in ("param_mse", "image_mse", "seconds_per_iteration", "mitsuba_ad_param_mse"):
         assert math.isfinite(s[k]), k
-    assert s["seed"] == 3 and s["nit"] == 4 and s["nfev"] == 8
+    # 4 iterations of N = 2 renders; plateau.minimize renders once more at the end for result.fun.
+    assert s["seed"] == 3 and s["nit"] == 4 and s["nfev"] in (8, 9)
     assert s["optimiser"].startswith("plateau" if HAVE_PLATEAU else "numpy stand-in")
     assert s["mitsuba_ad_iterations"] == 1 and s["mitsuba_ad_integrator"] == "direct_projective"
     assert s["width"] == 32 and s["height"] == 24
