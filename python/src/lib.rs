@@ -391,6 +391,23 @@ fn py_bool(b: bool) -> &'static str {
 
 /// The plateau-free gradient of `fun`: the gradient of `fun` smoothed by a Gaussian of spread
 /// `sigma` in parameter space, estimated from `samples` evaluations of `fun` per estimate.
+///
+/// fun: `fun(x) -> float`, `x` a float64 array shaped like the `x` of `estimate`. With
+///     `seeded=True`, `fun(x, seed)`: both members of an antithetic pair get the same seed
+///     (common random numbers for a noisy renderer). With `batched=True`, `fun(X) -> N values`
+///     once per estimate, `X` of shape `(N, *x.shape)`; both: `fun(X, seeds)`, `seeds` a uint64
+///     array of length N.
+/// samples: evaluations of `fun` per estimate (even with antithetic pairs).
+/// sampling: 'radial' (default; exact in every dimension), 'per_coordinate' (the paper's;
+///     biased for non-separable fun), 'gaussian' (plain evolution strategies).
+/// antithetic: pair every perturbation with its opposite.
+/// seed: estimate `e` draws from `(seed, e)` alone: the numbers of the Rust API.
+/// orthogonal: mutually orthogonal directions within one estimate ('radial', 'gaussian').
+/// parallel: evaluate the points of one estimate on several threads (for a `fun` that releases
+///     the GIL); the results are those of the sequential run.
+///
+/// The estimate runs in Rust with the GIL released; an exception raised by `fun` stops it and
+/// comes out of `estimate` unchanged.
 #[pyclass(module = "plateau", name = "PlateauFreeGradient")]
 struct PyPlateauFreeGradient {
     inner: RsPlateauFreeGradient<PyObjective>,
@@ -1210,6 +1227,7 @@ fn _rust_seconds_per_evaluation(
     })
 }
 
+/// The Rust extension of the Python package `plateau`; use `import plateau`.
 #[pymodule]
 fn _plateau(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyPlateauFreeGradient>()?;
