@@ -433,6 +433,15 @@ def fmt(v) -> str:
     return str(v)
 
 
+def early_param_mse(out: Path, seed: int, iterations: int):
+    """Parameter MSE of a Mitsuba plateau run after `iterations` iterations (its history)."""
+    h = out / f"seed-{seed}" / "history.csv"
+    if not h.exists():
+        return None
+    rows = read_csv(h)
+    return float(rows[iterations]["param_mse"]) if len(rows) > iterations else None
+
+
 def write_page(args, out: Path, seeds: list[int]) -> Path:
     results = REPO / "docs" / "results"
     page = Path(args.page) if args.page else out.with_suffix(".md")
@@ -513,7 +522,9 @@ def write_page(args, out: Path, seeds: list[int]) -> Path:
               f"fewer than 400 because of that cost): loss {fmt(ad['mitsuba_ad_initial_loss'])} -> "
               f"{fmt(ad['mitsuba_ad_final_loss'])}, parameter MSE {fmt(ad['initial_param_mse'] if 'initial_param_mse' in ad else 1.625)} -> "
               f"**{fmt(ad['mitsuba_ad_param_mse'])}** (paper, Mitsuba 3 after 400 iterations: 5.06; "
-              f"plateau on Mitsuba, seed 0: {fmt(runs.get(0, {}).get('param_mse'))}). "
+              f"plateau on Mitsuba, seed 0: {fmt(runs.get(0, {}).get('param_mse'))} after 400 iterations, "
+              f"{fmt(early_param_mse(out, 0, ad['mitsuba_ad_iterations']))} after the same "
+              f"{ad['mitsuba_ad_iterations']}). "
               f"History: `{os.path.relpath(ad_dir, REPO)}/ad_history.csv` (loss, parameters and gradient per iteration).", ""]
         L += [ad["mitsuba_ad_note"], ""]
     else:
