@@ -1,0 +1,110 @@
+"""SHADOW on Mitsuba 3 (python/examples/mitsuba_shadow.py): a short run, the scene, the hint.
+
+Needs mitsuba in the interpreter that runs pytest: `scripts/install-mitsuba VENV` installs it.
+Without it the Mitsuba tests are skipped, or fail when PLATEAU_REQUIRE_MITSUBA=1 (the test
+command sets it, so that a broken install cannot pass as a skip).
+"""
+
+from __future__ import annotations
+
+import csv
+import importlib.util
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+EXAMPLES = REPO / "python" / "examples"
+EXAMPLE = EXAMPLES / "mitsuba_shadow.py"
+sys.path.insert(0, str(EXAMPLES))
+
+HAVE_MITSUBA = importlib.util.find_spec("mitsuba") is not None
+HAVE_PLATEAU = importlib.util.find_spec("plateau") is not None
+REQUIRE = os.environ.get("PLATEAU_REQUIRE_MITSUBA") == "1"
+
+needs_mitsuba = pytest.mark.skipif(
+    not HAVE_MITSUBA and not REQUIRE,
+    reason="mitsuba is not installed (scripts/install-mitsuba; PLATEAU_REQUIRE_MITSUBA=1 makes this a failure)",
+)
+
+
+def test_without_mitsuba_the_example_says_how_to_install_it():
+    code = (
+        "import sys, runpy; sys.modules['mitsuba'] = None; "
+        f"sys.argv = ['mitsuba_shadow.py', '--out', 'unused']; runpy.run_path({str(EXAMPLE)!r}, run_name='__main__')"
+    )
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert p.returncode != 0
+    lines = [line for line in p.stderr.strip().splitlines() if line.strip()]
+    assert len(lines) == 1, p.stderr
+    assert "scripts/install-mitsuba" in lines[0]
+
+
+def test_standin_annealer_is_the_papers():
+    import _plateau_standin as s
+
+    assert s.paper_sigma(0.5, 400, 0) == 0.5
+    assert s.paper_sigma(0.5, 400, 199) == 0.5
+    assert abs(s.paper_sigma(0.5, 400, 399) - 0.01) < 1e-12
+    assert s.paper_sigma(0.5, 400, 300) < 0.5
+
+
+def test_standin_descends_a_quadratic():
+    import _plateau_standin as s
+
+    r = s.minimize(lambda x: float(((x - 1.0) ** 2).sum()), [0.0, 0.0], sigma0=0.5, iterations=300,
+                   lr=0.05, samples=2, seed=1)
+    assert r.nit == 300 and r.nfev == 600
+    assert max(abs(v - 1.0) for v in r.x) < 0.1
+
+
+@needs_mitsuba
+def test_scene_is_the_task_and_renders_deterministically_per_seed():
+    import mitsuba_scene as ms
+
+    mi = ms.load_mitsuba()
+    scene = ms.ShadowScene(mi, spp=8, scale=0.25)
+    target = scene.render(ms.TARGET, 0)
+    assert target.shape == (48, 64, 3)
+    # The same seed renders the same image (the common random numbers the loss relies on).
+    assert ms.image_mse(scene.render(ms.TARGET, 0), target) == 0.0
+    # Start and target differ only by where the shadow lies: a few percent of the image.
+    start = scene.render(ms.START, 0)
+    assert 1e-3 < ms.image_mse(start, target) < 5e-2
+    # The shadows of start and target do not overlap: moving the sphere a little moves its
+    # shadow but leaves the loss nearly unchanged (the plateau).
+    nudged = scene.render((ms.START[0] + 0.05, ms.START[1] - 0.05), 0)
+    assert abs(ms.image_mse(nudged, target) - ms.image_mse(start, target)) < 0.05 * ms.image_mse(start, target)
+    assert ms.param_mse(ms.START) == 1.625
+
+
+@needs_mitsuba
+def test_short_run_writes_everything(tmp_path):
+    out = tmp_path / "run"
+    cmd = [sys.executable, str(EXAMPLE), "--out", str(out), "--iterations", "4", "--scale", "0.125",
+           "--ad-iterations", "1", "--eval-every", "2", "--seed", "3"]
+    if not HAVE_PLATEAU:
+        cmd.append("--standin")
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=REPO)
+    assert p.returncode == 0, p.stderr[-3000:]
+    for f in ("target.png", "initial.png", "final.png", "ad_final.png", "convergence.png",
+              "history.csv", "ad_history.csv", "summary.json"):
+        assert (out / f).is_file(), f
+    s = json.loads((out / "summary.json").read_text())
+    for k in ("param_mse", "image_mse", "seconds_per_iteration", "mitsuba_ad_param_mse"):
+        assert math.isfinite(s[k]), k
+    # 4 iterations of N = 2 renders; plateau.minimize renders once more at the end for result.fun.
+    assert s["seed"] == 3 and s["nit"] == 4 and s["nfev"] in (8, 9)
+    assert s["optimiser"].startswith("plateau" if HAVE_PLATEAU else "numpy stand-in")
+    assert s["mitsuba_ad_iterations"] == 1 and s["mitsuba_ad_integrator"] == "direct_projective"
+    assert s["width"] == 32 and s["height"] == 24
+    rows = list(csv.DictReader(open(out / "history.csv")))
+    assert [int(r["iteration"]) for r in rows] == [0, 1, 2, 3]
+    # Four steps of LR 0.02 move theta at most 0.08 per coordinate.
+    assert abs(float(rows[-1]["theta0"]) + 0.5) <= 0.081 and abs(float(rows[-1]["theta1"]) - 2.5) <= 0.081
+    assert rows[0]["image_mse"] and rows[2]["image_mse"] and not rows[1]["image_mse"]
