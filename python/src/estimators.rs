@@ -1,0 +1,331 @@
+//! The estimators: PlateauFreeGradient, FiniteDifference, Spsa.
+
+use super::*;
+
+/// The plateau-free gradient of `fun`: the gradient of `fun` smoothed by a Gaussian of spread
+/// `sigma` in parameter space, estimated from `samples` evaluations of `fun` per estimate.
+///
+/// fun: `fun(x) -> float`, `x` a float64 array shaped like the `x` of `estimate`. With
+///     `seeded=True`, `fun(x, seed)`: both members of an antithetic pair get the same seed
+///     (common random numbers for a noisy renderer). With `batched=True`, `fun(X) -> N values`
+///     once per estimate, `X` of shape `(N, *x.shape)`; both: `fun(X, seeds)`, `seeds` a uint64
+///     array of length N.
+/// samples: evaluations of `fun` per estimate (even with antithetic pairs).
+/// sampling: 'radial' (default; exact in every dimension), 'per_coordinate' (the paper's;
+///     biased for non-separable fun), 'gaussian' (plain evolution strategies).
+/// antithetic: pair every perturbation with its opposite.
+/// seed: estimate `e` draws from `(seed, e)` alone: the numbers of the Rust API.
+/// orthogonal: mutually orthogonal directions within one estimate ('radial', 'gaussian').
+/// parallel: evaluate the points of one estimate on several threads (for a `fun` that releases
+///     the GIL); the results are those of the sequential run.
+///
+/// The estimate runs in Rust with the GIL released; an exception raised by `fun` stops it and
+/// comes out of `estimate` unchanged.
+#[pyclass(module = "plateau", name = "PlateauFreeGradient")]
+pub(crate) struct PyPlateauFreeGradient {
+    pub(crate) inner: RsPlateauFreeGradient<PyObjective>,
+    pub(crate) shared: Arc<Shared>,
+    pub(crate) fun: Py<PyAny>,
+    pub(crate) samples: usize,
+    pub(crate) sampling: Sampling,
+    pub(crate) antithetic: bool,
+    pub(crate) seed: u64,
+    pub(crate) batched: bool,
+    pub(crate) seeded: bool,
+    pub(crate) orthogonal: bool,
+    pub(crate) parallel: bool,
+}
+
+#[pymethods]
+impl PyPlateauFreeGradient {
+    #[new]
+    #[pyo3(signature = (fun, samples=2, sampling="radial", antithetic=true, seed=0, batched=false, seeded=false, orthogonal=false, parallel=false))]
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn new(
+        py: Python<'_>,
+        fun: Py<PyAny>,
+        samples: usize,
+        sampling: &str,
+        antithetic: bool,
+        seed: u64,
+        batched: bool,
+        seeded: bool,
+        orthogonal: bool,
+        parallel: bool,
+    ) -> PyResult<Self> {
+        if !fun.bind(py).is_callable() {
+            return Err(PyTypeError::new_err(format!(
+                "fun must be callable, got {}",
+                short_repr(fun.bind(py))
+            )));
+        }
+        let sampling = parse_sampling(sampling)?;
+        if samples == 0 {
+            return Err(value_error(Error::ZeroSamples));
+        }
+        if antithetic && samples % 2 == 1 {
+            return Err(PyValueError::new_err(format!(
+                "samples = {samples}: antithetic pairs need an even number of samples; use an even count or antithetic=False"
+            )));
+        }
+        if orthogonal && sampling == Sampling::PerCoordinate {
+            return Err(value_error(Error::OrthogonalUnsupported(sampling)));
+        }
+        let objective = PyObjective::new(fun.clone_ref(py), batched, seeded);
+        let shared = objective.shared.clone();
+        let inner = RsPlateauFreeGradient::new(objective)
+            .samples(samples)
+            .sampling(sampling)
+            .antithetic(antithetic)
+            .orthogonal(orthogonal)
+            .seed(seed)
+            .parallel(parallel);
+        Ok(PyPlateauFreeGradient {
+            inner,
+            shared,
+            fun,
+            samples,
+            sampling,
+            antithetic,
+            seed,
+            batched,
+            seeded,
+            orthogonal,
+            parallel,
+        })
+    }
+
+    /// The gradient of `fun` smoothed by N(0, sigma^2 I) at `x`, as a float64 array shaped like
+    /// `x`. `sigma` is a positive float, or an array of per-coordinate spreads (one per element
+    /// of `x`).
+    pub(crate) fn estimate<'py>(
+        &mut self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+        sigma: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (theta, shape) = to_vector(py, x, "x")?;
+        let spread = to_spread(py, sigma)?;
+        self.shared.set_shape(&shape);
+        let inner = &mut self.inner;
+        let result = py.detach(|| match &spread {
+            Spread::Scalar(s) => inner.estimate(&theta, *s),
+            Spread::PerCoordinate(s) => inner.estimate_with_spreads(&theta, s),
+        });
+        let estimate = self.shared.finish(result)?;
+        array_like(py, estimate.gradient, &shape)
+    }
+
+    /// Restarts the count of estimates: the next estimate repeats the first one's draws.
+    pub(crate) fn reset(&mut self) {
+        self.inner.reset();
+    }
+
+    /// The objective.
+    #[getter]
+    pub(crate) fn fun(&self, py: Python<'_>) -> Py<PyAny> {
+        self.fun.clone_ref(py)
+    }
+    /// Evaluations of `fun` per estimate.
+    #[getter]
+    pub(crate) fn samples(&self) -> usize {
+        self.samples
+    }
+    /// The sampler: 'radial', 'per_coordinate' or 'gaussian'.
+    #[getter]
+    pub(crate) fn sampling(&self) -> &'static str {
+        sampling_name(self.sampling)
+    }
+    /// Whether perturbations come in antithetic pairs.
+    #[getter]
+    pub(crate) fn antithetic(&self) -> bool {
+        self.antithetic
+    }
+    /// The seed.
+    #[getter]
+    pub(crate) fn seed(&self) -> u64 {
+        self.seed
+    }
+    /// Whether `fun` takes a whole batch.
+    #[getter]
+    pub(crate) fn batched(&self) -> bool {
+        self.batched
+    }
+    /// Whether `fun` takes a seed.
+    #[getter]
+    pub(crate) fn seeded(&self) -> bool {
+        self.seeded
+    }
+    /// Whether the directions of one estimate are orthogonal.
+    #[getter]
+    pub(crate) fn orthogonal(&self) -> bool {
+        self.orthogonal
+    }
+    /// Whether the evaluations of one estimate run on several threads.
+    #[getter]
+    pub(crate) fn parallel(&self) -> bool {
+        self.parallel
+    }
+    /// Estimates made since construction or the last `reset()`.
+    #[getter]
+    pub(crate) fn estimates(&self) -> u64 {
+        self.inner.estimates_made()
+    }
+    /// Evaluations of `fun` since construction.
+    #[getter]
+    pub(crate) fn nfev(&self) -> u64 {
+        self.shared.evaluations.load(Ordering::Relaxed)
+    }
+
+    pub(crate) fn __repr__(&self) -> String {
+        format!(
+            "PlateauFreeGradient(samples={}, sampling='{}', antithetic={}, seed={}, batched={}, seeded={}, orthogonal={}, parallel={})",
+            self.samples,
+            sampling_name(self.sampling),
+            py_bool(self.antithetic),
+            self.seed,
+            py_bool(self.batched),
+            py_bool(self.seeded),
+            py_bool(self.orthogonal),
+            py_bool(self.parallel),
+        )
+    }
+}
+
+/// Central finite differences with a fixed step: the unsmoothed gradient (zero on a plateau).
+#[pyclass(module = "plateau", name = "FiniteDifference")]
+pub(crate) struct PyFiniteDifference {
+    pub(crate) inner: RsFiniteDifference<PyObjective>,
+    pub(crate) shared: Arc<Shared>,
+    pub(crate) step: f64,
+    pub(crate) seed: u64,
+}
+
+#[pymethods]
+impl PyFiniteDifference {
+    #[new]
+    #[pyo3(signature = (fun, step=1e-3, seed=0, batched=false, seeded=false))]
+    pub(crate) fn new(
+        py: Python<'_>,
+        fun: Py<PyAny>,
+        step: f64,
+        seed: u64,
+        batched: bool,
+        seeded: bool,
+    ) -> PyResult<Self> {
+        if !fun.bind(py).is_callable() {
+            return Err(PyTypeError::new_err("fun must be callable"));
+        }
+        let objective = PyObjective::new(fun, batched, seeded);
+        let shared = objective.shared.clone();
+        let inner = RsFiniteDifference::new(objective, step)
+            .map_err(value_error)?
+            .seed(seed);
+        Ok(PyFiniteDifference {
+            inner,
+            shared,
+            step,
+            seed,
+        })
+    }
+
+    /// `(f(x + h e_i) - f(x - h e_i)) / 2h` for every coordinate: `2 n` evaluations. `sigma` is
+    /// accepted for symmetry with the other estimators and ignored.
+    #[pyo3(signature = (x, sigma=None))]
+    pub(crate) fn estimate<'py>(
+        &mut self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+        sigma: Option<f64>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let _ = sigma;
+        let (theta, shape) = to_vector(py, x, "x")?;
+        self.shared.set_shape(&shape);
+        let inner = &mut self.inner;
+        let result = py.detach(|| inner.estimate(&theta, 1.0));
+        let estimate = self.shared.finish(result)?;
+        array_like(py, estimate.gradient, &shape)
+    }
+
+    /// The step h.
+    #[getter]
+    pub(crate) fn step(&self) -> f64 {
+        self.step
+    }
+    /// The seed handed to a seeded `fun`.
+    #[getter]
+    pub(crate) fn seed(&self) -> u64 {
+        self.seed
+    }
+    /// Evaluations of `fun` since construction.
+    #[getter]
+    pub(crate) fn nfev(&self) -> u64 {
+        self.shared.evaluations.load(Ordering::Relaxed)
+    }
+
+    pub(crate) fn __repr__(&self) -> String {
+        format!("FiniteDifference(step={:?}, seed={})", self.step, self.seed)
+    }
+}
+
+/// SPSA: one Rademacher direction per estimate, 2 evaluations whatever the dimension.
+#[pyclass(module = "plateau", name = "Spsa")]
+pub(crate) struct PySpsa {
+    pub(crate) inner: RsSpsa<PyObjective>,
+    pub(crate) shared: Arc<Shared>,
+    pub(crate) seed: u64,
+}
+
+#[pymethods]
+impl PySpsa {
+    #[new]
+    #[pyo3(signature = (fun, seed=0, batched=false, seeded=false))]
+    pub(crate) fn new(
+        py: Python<'_>,
+        fun: Py<PyAny>,
+        seed: u64,
+        batched: bool,
+        seeded: bool,
+    ) -> PyResult<Self> {
+        if !fun.bind(py).is_callable() {
+            return Err(PyTypeError::new_err("fun must be callable"));
+        }
+        let objective = PyObjective::new(fun, batched, seeded);
+        let shared = objective.shared.clone();
+        Ok(PySpsa {
+            inner: RsSpsa::new(objective).seed(seed),
+            shared,
+            seed,
+        })
+    }
+
+    /// `g_i = (f(x + c d) - f(x - c d)) / (2 c d_i)` with `c = sigma`.
+    pub(crate) fn estimate<'py>(
+        &mut self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+        sigma: f64,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (theta, shape) = to_vector(py, x, "x")?;
+        self.shared.set_shape(&shape);
+        let inner = &mut self.inner;
+        let result = py.detach(|| inner.estimate(&theta, sigma));
+        let estimate = self.shared.finish(result)?;
+        array_like(py, estimate.gradient, &shape)
+    }
+
+    /// The seed.
+    #[getter]
+    pub(crate) fn seed(&self) -> u64 {
+        self.seed
+    }
+    /// Evaluations of `fun` since construction.
+    #[getter]
+    pub(crate) fn nfev(&self) -> u64 {
+        self.shared.evaluations.load(Ordering::Relaxed)
+    }
+
+    pub(crate) fn __repr__(&self) -> String {
+        format!("Spsa(seed={})", self.seed)
+    }
+}
