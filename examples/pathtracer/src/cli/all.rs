@@ -24,6 +24,11 @@ pub(super) struct Args {
     /// the median and the range.
     #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = values::at_least(1u64))]
     seeds: u64,
+    /// The method of the runs: plateau (the paper's loop: plateau-free gradient, Adam, the
+    /// paper's annealing) or adaptive (the library's Minimizer with the same evaluations)
+    /// [default: plateau].
+    #[arg(long, value_enum)]
+    method: Option<Method>,
     /// Skip the finite-difference baseline.
     #[arg(long)]
     no_baseline: bool,
@@ -40,6 +45,7 @@ pub(super) fn run(args: Args) -> Result<()> {
             args.quick,
             args.tasks.as_deref(),
             args.seeds,
+            args.method.unwrap_or(Method::Plateau),
             !args.no_baseline,
         )
     })
@@ -47,14 +53,25 @@ pub(super) fn run(args: Args) -> Result<()> {
 
 /// Every task with the plateau-free gradient and, where it is affordable, the finite-difference
 /// baseline; then `results.md`.
-fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64, baseline: bool) -> Result<()> {
+fn all(
+    out: &Path,
+    quick: bool,
+    only: Option<&[String]>,
+    seeds: u64,
+    method: Method,
+    baseline: bool,
+) -> Result<()> {
     let command = format!(
-        "cargo run --release -p pathtracer -- all{}{}{}{} --out {}",
+        "cargo run --release -p pathtracer -- all{}{}{}{}{} --out {}",
         if quick { " --quick" } else { "" },
         if seeds > 1 {
             format!(" --seeds {seeds}")
         } else {
             String::new()
+        },
+        match method {
+            Method::Plateau => String::new(),
+            m => format!(" --method {}", m.as_arg()),
         },
         if baseline { "" } else { " --no-baseline" },
         only.map_or(String::new(), |t| format!(" --tasks {}", t.join(","))),
@@ -65,6 +82,7 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64, baseline: b
             continue;
         }
         let mut plateau = Settings::defaults(&task);
+        plateau.method = method;
         if quick {
             plateau.iterations = (plateau.iterations / 10).max(20);
             plateau.eval_every = run::eval_every(plateau.iterations, 20);
@@ -83,7 +101,10 @@ fn all(out: &Path, quick: bool, only: Option<&[String]>, seeds: u64, baseline: b
         // Central differences cost 2n renders per iteration: affordable for the
         // low-dimensional tasks only (SORT would need 300 renders an iteration).
         if baseline && task.dim() <= 8 {
-            let mut fd = plateau.clone();
+            let mut fd = Settings {
+                method: Method::Plateau,
+                ..plateau.clone()
+            };
             fd.method = Method::Fd;
             run::optimize(
                 &task,

@@ -50,7 +50,9 @@ struct RunOptions {
     #[arg(long)]
     no_anneal: bool,
     /// How the gradient is obtained: plateau (the paper's), fd (central finite differences)
-    /// or spsa [default: plateau].
+    /// or spsa, all in the paper's loop (Adam, annealing); or adaptive: the library's
+    /// Minimizer (no loop, no learning rate) with the same N x iterations evaluations,
+    /// sigma0, bounds and seed [default: plateau].
     #[arg(long, value_enum)]
     method: Option<Method>,
     /// Renderer seeds: fixed (every render uses the run's seed, as the paper's code) or pair
@@ -110,6 +112,11 @@ pub(super) fn run(args: Args) -> Result<()> {
         return Err(usage(format!(
             "--samples {samples}: antithetic pairs need an even number; allowed: an even count, or add --no-antithetic"
         )));
+    }
+    if opts.budget.is_some() && opts.method == Some(Method::Adaptive) {
+        return Err(usage(
+            "--budget with --method adaptive: the time budget applies to the paper's loop only; allowed: drop --budget, or another --method".into(),
+        ));
     }
     with_threads(opts.render.threads, || {
         let mut settings = opts.settings(&task);

@@ -44,6 +44,7 @@ pub(super) fn write_results(out: &Path, command: &str) -> Result<()> {
     }
     let header = [
         "task",
+        "method",
         "N",
         "sigma0",
         "spp",
@@ -93,6 +94,12 @@ fn results_row(task: &Task, ours: &[run::Summary], fd: Option<&run::Summary>) ->
     };
     vec![
         task.name().to_uppercase(),
+        match s.method {
+            run::Method::Plateau => format!("paper loop, {:?}", s.sampling).to_lowercase(),
+            run::Method::Adaptive => "adaptive search".into(),
+            run::Method::Fd => "finite difference".into(),
+            run::Method::Spsa => "SPSA".into(),
+        },
         s.samples.to_string(),
         s.sigma0.to_string(),
         s.spp.to_string(),

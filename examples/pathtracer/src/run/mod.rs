@@ -6,6 +6,7 @@
 //! files. What a run can be told is in `settings.rs`, what it yields in `outcome.rs`, the
 //! files it writes in `outputs.rs`, the time-budget planner in `budget.rs`.
 
+mod adaptive;
 mod budget;
 mod outcome;
 mod outputs;
@@ -18,9 +19,7 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 use plateau::baseline::{FiniteDifference, Spsa};
-use plateau::{
-    Adam, Annealer, GradientEstimator, History, Optimizer, PlateauFreeGradient, Seeded, Step,
-};
+use plateau::{Adam, Annealer, GradientEstimator, Optimizer, PlateauFreeGradient, Seeded, Step};
 
 pub use budget::{plan_for_budget, plan_with_render_time};
 pub use outcome::{write_history, Outcome, Row, Summary};
@@ -44,21 +43,33 @@ pub fn optimize(
 
     let render_time = Cell::new(Duration::ZERO);
     let loss = image_loss(task, s, &reference, &render_time);
-    let mut estimator = estimator(s, &loss)?;
-    let mut optimizer = optimizer(task, s)?;
-    let mut recorder = Recorder::new(task, s, &reference, &start, show_progress);
-    let run = optimizer.minimize_with(&mut *estimator, &start, |step| recorder.observe(step))?;
-    drop(estimator);
-    let (history, snapshots, optimisation_time) = recorder.finish();
+    let (ended, final_theta, history, snapshots, optimisation_time) =
+        if s.method == Method::Adaptive {
+            adaptive::run(task, s, &loss, &reference, &start, show_progress)?
+        } else {
+            let mut estimator = estimator(s, &loss)?;
+            let mut optimizer = optimizer(task, s)?;
+            let mut recorder = Recorder::new(task, s, &reference, &start, show_progress);
+            let run =
+                optimizer.minimize_with(&mut *estimator, &start, |step| recorder.observe(step))?;
+            drop(estimator);
+            let (history, snapshots, optimisation_time) = recorder.finish();
+            let final_theta = run
+                .last_theta()
+                .map_or_else(|| start.clone(), <[f64]>::to_vec);
+            let ended = Ended {
+                iterations: run.iterations(),
+                evaluations: run.evaluations,
+                stopped_early: run.stopped_early,
+            };
+            (ended, final_theta, history, snapshots, optimisation_time)
+        };
 
-    let final_theta = run
-        .last_theta()
-        .map_or_else(|| start.clone(), <[f64]>::to_vec);
     let final_image = task.render(&final_theta, s.seed, s.spp, view);
     let summary = summarize(
         task,
         s,
-        &run,
+        &ended,
         &final_theta,
         [&reference, &initial, &final_image],
         [optimisation_time, render_time.get()],
@@ -113,6 +124,7 @@ where
         ),
         Method::Fd => Box::new(FiniteDifference::new(Seeded(loss), s.fd_step)?.seed(s.seed)),
         Method::Spsa => Box::new(Spsa::new(Seeded(loss)).seed(s.seed)),
+        Method::Adaptive => unreachable!("the adaptive search has no gradient estimator"),
     })
 }
 
@@ -221,7 +233,7 @@ impl<'a> Recorder<'a> {
 fn summarize(
     task: &Task,
     s: &Settings,
-    run: &History,
+    run: &Ended,
     final_theta: &[f64],
     [reference, initial, final_image]: [&Image; 3],
     [optimisation_time, render_time]: [Duration; 2],
@@ -232,7 +244,7 @@ fn summarize(
     let image_mse_other_seed = task
         .render(final_theta, other_seed, s.spp, view)
         .mse(&task.render(&target, other_seed, s.spp, view));
-    let done = run.iterations().max(1) as f64;
+    let done = run.iterations.max(1) as f64;
     let seconds_total = optimisation_time.as_secs_f64();
     let render_seconds = render_time.as_secs_f64();
     Summary {
@@ -242,7 +254,7 @@ fn summarize(
         antithetic: s.antithetic,
         anneal: s.anneal,
         crn: s.crn,
-        iterations: run.iterations(),
+        iterations: run.iterations,
         samples: s.samples,
         spp: s.spp,
         sigma0: s.sigma0,
@@ -265,6 +277,14 @@ fn summarize(
         final_theta: (task.dim() <= 16).then(|| final_theta.to_vec()),
         target_theta: (task.dim() <= 16).then(|| target.clone()),
     }
+}
+
+/// How a run's loop ended: its iterations, the evaluations of the loss, and whether a time
+/// budget stopped it.
+struct Ended {
+    iterations: usize,
+    evaluations: usize,
+    stopped_early: bool,
 }
 
 /// The progress bar of a run (hidden unless `show`).
@@ -315,5 +335,33 @@ mod tests {
             fd.summary.param_mse,
             fd.summary.initial_param_mse
         );
+    }
+
+    /// `--method adaptive` (the library's Minimizer) leaves SHADOW's plateau too, within the
+    /// paper loop's evaluations (here 2 x 150 = 300), with one history row per iteration.
+    #[test]
+    fn the_adaptive_search_converges_on_shadow_within_the_loops_evaluations() {
+        let task = tasks::by_name("shadow").expect("the SHADOW task exists");
+        let mut s = Settings::defaults(&task);
+        s.scale = Some(0.25);
+        s.spp = 4;
+        s.iterations = 150;
+        s.eval_every = usize::MAX;
+        s.method = Method::Adaptive;
+        let run = optimize(&task, &s, None, false).expect("the run succeeds");
+        let m = &run.summary;
+        assert!(
+            m.param_mse < 1e-2,
+            "adaptive search: param MSE {} (from {})",
+            m.param_mse,
+            m.initial_param_mse
+        );
+        assert!(
+            m.evaluations <= s.samples * s.iterations,
+            "{} evaluations",
+            m.evaluations
+        );
+        assert_eq!(run.history.len(), m.iterations);
+        assert!(run.history.last().is_some_and(|r| r.image_mse.is_some()));
     }
 }

@@ -26,6 +26,10 @@ pub enum Method {
     Fd,
     /// Simultaneous-perturbation stochastic approximation.
     Spsa,
+    /// The library's adaptive search (`plateau::Minimizer`): mirrored Gaussian pairs with
+    /// step-size and covariance adaptation, a plateau rule and restarts from the best point,
+    /// given the same evaluations (N x iterations), sigma0, bounds and seed as the paper loop.
+    Adaptive,
 }
 
 /// Which renderer seed each evaluation uses.
@@ -114,12 +118,27 @@ impl Settings {
             scale: self.scale,
         }
     }
+}
 
+impl Method {
+    /// The spelling of `--method` for this method.
+    pub fn as_arg(self) -> &'static str {
+        match self {
+            Method::Plateau => "plateau",
+            Method::Fd => "fd",
+            Method::Spsa => "spsa",
+            Method::Adaptive => "adaptive",
+        }
+    }
+}
+
+impl Settings {
     /// A short label for tables and legends.
     pub fn label(&self) -> String {
         match self.method {
             Method::Fd => "finite difference".into(),
             Method::Spsa => "SPSA".into(),
+            Method::Adaptive => "adaptive search".into(),
             Method::Plateau => {
                 let mut s = format!("{:?}", self.sampling).to_lowercase();
                 if !self.antithetic {
