@@ -19,6 +19,10 @@ use crate::render::Image;
 use crate::report::Result;
 use crate::tasks::{param_mse, Task};
 
+/// How a run ended, its best point, its history, six snapshots for the progress strip and the
+/// optimisation time: what both methods hand to the outputs.
+pub(super) type Finished = (Ended, Vec<f64>, Vec<Row>, Vec<Vec<f64>>, Duration);
+
 /// Runs the adaptive search; returns how it ended, the best point, the history, six snapshots
 /// of the best point for the progress strip, and the optimisation time (the image-error renders
 /// excluded).
@@ -29,7 +33,7 @@ pub(super) fn run<L>(
     reference: &Image,
     start: &[f64],
     show_progress: bool,
-) -> Result<(Ended, Vec<f64>, Vec<Row>, Vec<Vec<f64>>, Duration)>
+) -> Result<Finished>
 where
     L: Fn(&[f64], u64) -> f64,
 {
