@@ -239,12 +239,7 @@ impl PyFiniteDifference {
         sigma: Option<f64>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let _ = sigma;
-        let (theta, shape) = to_vector(py, x, "x")?;
-        self.shared.set_shape(&shape);
-        let inner = &mut self.inner;
-        let result = py.detach(|| inner.estimate(&theta, 1.0));
-        let estimate = self.shared.finish(result)?;
-        array_like(py, estimate.gradient, &shape)
+        estimate_array(py, &mut self.inner, &self.shared, x, 1.0)
     }
 
     /// The step h.
@@ -306,12 +301,7 @@ impl PySpsa {
         x: &Bound<'py, PyAny>,
         sigma: f64,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let (theta, shape) = to_vector(py, x, "x")?;
-        self.shared.set_shape(&shape);
-        let inner = &mut self.inner;
-        let result = py.detach(|| inner.estimate(&theta, sigma));
-        let estimate = self.shared.finish(result)?;
-        array_like(py, estimate.gradient, &shape)
+        estimate_array(py, &mut self.inner, &self.shared, x, sigma)
     }
 
     /// The seed.
@@ -328,4 +318,20 @@ impl PySpsa {
     pub(crate) fn __repr__(&self) -> String {
         format!("Spsa(seed={})", self.seed)
     }
+}
+
+/// One estimate by a baseline, shaped like `x`: the GIL released while it runs, an exception
+/// of `fun` raised unchanged.
+fn estimate_array<'py, G: GradientEstimator + Send>(
+    py: Python<'py>,
+    inner: &mut G,
+    shared: &Shared,
+    x: &Bound<'py, PyAny>,
+    sigma: f64,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (theta, shape) = to_vector(py, x, "x")?;
+    shared.set_shape(&shape);
+    let result = py.detach(|| inner.estimate(&theta, sigma));
+    let estimate = shared.finish(result)?;
+    array_like(py, estimate.gradient, &shape)
 }
