@@ -288,32 +288,6 @@ mod tests {
     }
 
     #[test]
-    fn schedule_names_round_trip_and_bad_names_are_errors() {
-        for schedule in [
-            Schedule::Constant,
-            Schedule::WarmLinear { warmup: 0.5 },
-            Schedule::WarmLinear { warmup: 0.3 },
-            Schedule::WarmLinear { warmup: 0.0 },
-            Schedule::Exponential,
-            Schedule::Cosine,
-        ] {
-            assert_eq!(schedule.to_string().parse::<Schedule>(), Ok(schedule));
-        }
-        for bad in ["linear", "warm-linear", "warm-linear:x", ""] {
-            match bad.parse::<Schedule>() {
-                Err(Error::UnknownName { what, value, .. }) => {
-                    assert_eq!((what, value.as_str()), ("schedule", bad));
-                }
-                other => panic!("{bad}: {other:?}"),
-            }
-        }
-        assert!(matches!(
-            "warm-linear:1".parse::<Schedule>(),
-            Err(Error::InvalidParameter { name: "warmup", value, .. }) if value == 1.0
-        ));
-    }
-
-    #[test]
     fn bad_configuration_is_an_error() {
         assert!(Annealer::paper(0.0, 10).is_err());
         assert!(Annealer::paper(f64::NAN, 10).is_err());

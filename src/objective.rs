@@ -103,15 +103,6 @@ impl<F: Fn(&[f64]) -> f64> Objective for F {
 #[derive(Clone, Copy)]
 pub struct Seeded<F>(pub F);
 
-impl<F> fmt::Debug for Seeded<F> {
-    /// The closure by its type's name (closures have no `Debug`).
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_tuple("Seeded")
-            .field(&std::any::type_name::<F>())
-            .finish()
-    }
-}
-
 impl<F: Fn(&[f64], u64) -> f64> Objective for Seeded<F> {
     fn evaluate(&self, point: &[f64], seed: u64) -> f64 {
         (self.0)(point, seed)
@@ -134,15 +125,6 @@ impl<F: Fn(&[f64], u64) -> f64> Objective for Seeded<F> {
 #[derive(Clone, Copy)]
 pub struct Batch<F>(pub F);
 
-impl<F> fmt::Debug for Batch<F> {
-    /// The closure by its type's name (closures have no `Debug`).
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_tuple("Batch")
-            .field(&std::any::type_name::<F>())
-            .finish()
-    }
-}
-
 impl<F: Fn(Points<'_>, &[u64], &mut [f64])> Objective for Batch<F> {
     fn evaluate(&self, point: &[f64], seed: u64) -> f64 {
         let mut out = [0.0];
@@ -154,3 +136,19 @@ impl<F: Fn(Points<'_>, &[u64], &mut [f64])> Objective for Batch<F> {
         (self.0)(points, seeds, out)
     }
 }
+
+/// `Debug` for the closure wrappers, written once: `Seeded("closure type")`.
+macro_rules! debug_by_type_name {
+    ($($wrapper:ident),*) => {$(
+        impl<F> fmt::Debug for $wrapper<F> {
+            /// The closure by its type's name (closures have no `Debug`).
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.debug_tuple(stringify!($wrapper))
+                    .field(&std::any::type_name::<F>())
+                    .finish()
+            }
+        }
+    )*};
+}
+
+debug_by_type_name!(Seeded, Batch);

@@ -1,5 +1,5 @@
 //! The library's API as users of rand and glam expect it: names that parse and print with
-//! one spelling, configurations checked where they are made, `Debug` everywhere, serde
+//! one spelling (and every bad name an error that says which), configurations checked where they are made, `Debug` everywhere, serde
 //! behind its feature, and the fast paths agreeing with the general ones bit for bit.
 
 use plateau::baseline::{FiniteDifference, Spsa};
@@ -41,7 +41,9 @@ fn schedule_names_round_trip_and_name_bad_values() {
     for s in [
         Schedule::Constant,
         Schedule::WarmLinear { warmup: 0.5 },
+        Schedule::WarmLinear { warmup: 0.3 },
         Schedule::WarmLinear { warmup: 0.125 },
+        Schedule::WarmLinear { warmup: 0.0 },
         Schedule::Exponential,
         Schedule::Cosine,
     ] {
@@ -51,6 +53,18 @@ fn schedule_names_round_trip_and_name_bad_values() {
         Schedule::WarmLinear { warmup: 0.5 }.to_string(),
         "warm-linear:0.5"
     );
+    for bad in ["linear", "warm-linear", "warm-linear:x", ""] {
+        match bad.parse::<Schedule>() {
+            Err(Error::UnknownName { what, value, .. }) => {
+                assert_eq!((what, value.as_str()), ("schedule", bad));
+            }
+            other => panic!("{bad}: {other:?}"),
+        }
+    }
+    assert!(matches!(
+        "warm-linear:1".parse::<Schedule>(),
+        Err(Error::InvalidParameter { name: "warmup", value, .. }) if value == 1.0
+    ));
     let text = "geometric".parse::<Schedule>().unwrap_err().to_string();
     assert!(
         text.contains("\"geometric\"") && text.contains("cosine"),

@@ -7,23 +7,32 @@ use std::sync::Mutex;
 
 use plateau::{Adam, Annealer, Batch, Optimizer, PlateauFreeGradient, Points, Sampling, Seeded};
 
-/// Every (sampler, antithetic, orthogonal) combination the estimator accepts.
+mod common;
+use common::{bits, tilted_2d};
+
+/// Every (sampler, antithetic, orthogonal) combination the estimator accepts: all but the
+/// per-coordinate sampler with orthogonal directions.
 fn configurations() -> Vec<(Sampling, bool, bool)> {
-    let mut all = Vec::new();
-    for sampling in [
-        Sampling::Radial,
-        Sampling::PerCoordinate,
-        Sampling::Gaussian,
-    ] {
-        for antithetic in [true, false] {
-            for orthogonal in [false, true] {
-                if !(orthogonal && sampling == Sampling::PerCoordinate) {
-                    all.push((sampling, antithetic, orthogonal));
-                }
-            }
-        }
-    }
-    all
+    let accepted = |&(sampling, antithetic, orthogonal): &(Sampling, bool, bool)| {
+        PlateauFreeGradient::new(bumpy)
+            .sampling(sampling)
+            .antithetic(antithetic)
+            .orthogonal(orthogonal)
+            .validate()
+            .is_ok()
+    };
+    Sampling::ALL
+        .into_iter()
+        .flat_map(|s| {
+            [
+                (s, true, false),
+                (s, true, true),
+                (s, false, false),
+                (s, false, true),
+            ]
+        })
+        .filter(accepted)
+        .collect()
 }
 
 /// A non-separable, discontinuous objective whose value depends on every coordinate.
@@ -34,10 +43,6 @@ fn bumpy(x: &[f64]) -> f64 {
         .map(|(i, v)| v * (1.0 + i as f64).sqrt())
         .sum();
     (3.0 * s).sin() + if s > 0.2 { 1.0 } else { 0.0 }
-}
-
-fn bits(g: &[f64]) -> Vec<u64> {
-    g.iter().map(|x| x.to_bits()).collect()
 }
 
 /// `estimates` consecutive estimates, as bit patterns.
@@ -116,8 +121,7 @@ fn parallel_equals_sequential_on_one_two_and_four_threads() {
 #[test]
 fn optimisation_runs_repeat_exactly() {
     let go = |parallel: bool| {
-        let f = |x: &[f64]| if x[0] + 2.0 * x[1] > 0.3 { 1.0 } else { 0.0 };
-        let mut grad = PlateauFreeGradient::new(f)
+        let mut grad = PlateauFreeGradient::new(tilted_2d)
             .samples(8)
             .seed(7)
             .parallel(parallel);
@@ -136,15 +140,19 @@ fn seeds_of(log: &Log) -> Vec<u64> {
     log.lock().unwrap().iter().map(|(_, s)| *s).collect()
 }
 
+/// The seeded objective `x[0]` that records every call in `log`.
+fn logged(log: &Log) -> Seeded<impl Fn(&[f64], u64) -> f64 + Sync + '_> {
+    Seeded(move |x: &[f64], seed: u64| {
+        log.lock().unwrap().push((x.to_vec(), seed));
+        x[0]
+    })
+}
+
 #[test]
 fn seeded_objective_gets_one_seed_per_pair() {
     for (sampling, _, orthogonal) in configurations() {
         let log: Log = Mutex::new(Vec::new());
-        let f = Seeded(|x: &[f64], seed: u64| {
-            log.lock().unwrap().push((x.to_vec(), seed));
-            x[0]
-        });
-        let mut est = PlateauFreeGradient::new(f)
+        let mut est = PlateauFreeGradient::new(logged(&log))
             .sampling(sampling)
             .orthogonal(orthogonal)
             .samples(8)
@@ -179,11 +187,7 @@ fn seeded_objective_gets_one_seed_per_pair() {
 #[test]
 fn without_pairs_every_evaluation_has_its_own_seed() {
     let log: Log = Mutex::new(Vec::new());
-    let f = Seeded(|x: &[f64], seed: u64| {
-        log.lock().unwrap().push((x.to_vec(), seed));
-        x[0]
-    });
-    let mut est = PlateauFreeGradient::new(f)
+    let mut est = PlateauFreeGradient::new(logged(&log))
         .antithetic(false)
         .samples(7)
         .seed(3);
@@ -198,28 +202,22 @@ fn seeds_are_the_same_in_parallel_and_in_a_batch() {
     let parallel: Log = Mutex::new(Vec::new());
     let batch: Log = Mutex::new(Vec::new());
     let theta = [0.1, 0.2];
-    PlateauFreeGradient::new(Seeded(|x: &[f64], s: u64| {
-        sequential.lock().unwrap().push((x.to_vec(), s));
-        0.0
-    }))
-    .samples(16)
-    .seed(9)
-    .estimate(&theta, 0.5)
-    .unwrap();
-    PlateauFreeGradient::new(Seeded(|x: &[f64], s: u64| {
-        parallel.lock().unwrap().push((x.to_vec(), s));
-        0.0
-    }))
-    .samples(16)
-    .seed(9)
-    .parallel(true)
-    .estimate(&theta, 0.5)
-    .unwrap();
+    PlateauFreeGradient::new(logged(&sequential))
+        .samples(16)
+        .seed(9)
+        .estimate(&theta, 0.5)
+        .unwrap();
+    PlateauFreeGradient::new(logged(&parallel))
+        .samples(16)
+        .seed(9)
+        .parallel(true)
+        .estimate(&theta, 0.5)
+        .unwrap();
     PlateauFreeGradient::new(Batch(|p: Points<'_>, s: &[u64], out: &mut [f64]| {
         let mut log = batch.lock().unwrap();
         for (i, o) in out.iter_mut().enumerate() {
             log.push((p.get(i).to_vec(), s[i]));
-            *o = 0.0;
+            *o = p.get(i)[0];
         }
     }))
     .samples(16)

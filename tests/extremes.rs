@@ -11,11 +11,8 @@ use plateau::kernel::{
 use plateau::{Error, PlateauFreeGradient, Sampling};
 use rand::TryRng;
 
-const SAMPLERS: [Sampling; 3] = [
-    Sampling::Radial,
-    Sampling::PerCoordinate,
-    Sampling::Gaussian,
-];
+mod common;
+use common::{gradient_draws, mean_and_standard_error};
 
 /// A generator that answers the same bits forever: the ends of the uniform's range.
 struct Constant(u64);
@@ -95,23 +92,17 @@ fn spreads_from_1e_minus_12_to_1e12() {
     let theta = [0.5, -0.25, 0.125];
     for exponent in -12..=12 {
         let sigma = 10f64.powi(exponent);
-        for sampling in SAMPLERS {
+        for sampling in Sampling::ALL {
             let mut est = PlateauFreeGradient::new(f).sampling(sampling).seed(3);
-            let k = 400;
-            let gs: Vec<Vec<f64>> = (0..k)
-                .map(|_| est.estimate(&theta, sigma).unwrap().gradient)
-                .collect();
-            for i in 0..3 {
-                let mean = gs.iter().map(|g| g[i]).sum::<f64>() / k as f64;
-                let sd =
-                    (gs.iter().map(|g| (g[i] - mean).powi(2)).sum::<f64>() / (k - 1) as f64).sqrt();
+            let draws = gradient_draws(&mut est, &theta, sigma, 400);
+            for (i, coordinate) in draws.iter().enumerate() {
                 assert!(
-                    gs.iter().all(|g| g[i].is_finite()),
+                    coordinate.iter().all(|g| g.is_finite()),
                     "{sampling:?} sigma {sigma:e}"
                 );
-                let tol = 5.0 * sd / (k as f64).sqrt();
+                let (mean, se) = mean_and_standard_error(coordinate);
                 assert!(
-                    (mean - slope[i]).abs() < tol,
+                    (mean - slope[i]).abs() < 5.0 * se,
                     "{sampling:?} sigma {sigma:e} coordinate {i}: {mean} vs {}",
                     slope[i]
                 );
@@ -136,7 +127,7 @@ fn theta_near_1e300() {
     // sigma far below theta's spacing: every point is theta itself; the gradient is exactly
     // zero (nothing changes), not NaN.
     let f = |x: &[f64]| if x[0] > 1e300 { 1.0 } else { 0.0 };
-    for sampling in SAMPLERS {
+    for sampling in Sampling::ALL {
         let est = PlateauFreeGradient::new(f)
             .sampling(sampling)
             .estimate(&[1e300, -1e300], 1.0)
@@ -165,18 +156,14 @@ fn values_near_plus_minus_1e300() {
     // Smoothed gradient at the edge: 2e300 phi(0) / sigma.
     let f = |x: &[f64]| if x[0] > 0.0 { 1e300 } else { -1e300 };
     let truth = 2e300 / (2.0 * PI).sqrt();
-    for sampling in SAMPLERS {
+    for sampling in Sampling::ALL {
         let mut est = PlateauFreeGradient::new(f).sampling(sampling).seed(9);
-        let k = 2000;
-        let gs: Vec<f64> = (0..k)
-            .map(|_| est.estimate(&[0.0], 1.0).unwrap().gradient[0])
-            .collect();
+        let gs = &gradient_draws(&mut est, &[0.0], 1.0, 2000)[0];
         assert!(gs.iter().all(|g| g.is_finite()));
-        let mean = gs.iter().sum::<f64>() / k as f64;
-        let sd = (gs.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / (k - 1) as f64).sqrt();
+        let (mean, se) = mean_and_standard_error(gs);
         // 5 standard errors, as everywhere.
         assert!(
-            (mean - truth).abs() < 5.0 * sd / (k as f64).sqrt(),
+            (mean - truth).abs() < 5.0 * se,
             "{sampling:?}: {mean:e} vs {truth:e}"
         );
     }
@@ -219,15 +206,10 @@ fn one_dimension() {
     // n = 1: all three samplers at once on 1[x > 0.3]; smoothed gradient phi(m)/sigma.
     let f = |x: &[f64]| if x[0] > 0.3 { 1.0 } else { 0.0 };
     let truth = (-0.5 * 0.6f64.powi(2)).exp() / (2.0 * PI).sqrt() / 0.5;
-    for sampling in SAMPLERS {
+    for sampling in Sampling::ALL {
         let mut est = PlateauFreeGradient::new(f).sampling(sampling).seed(4);
-        let k = 20_000;
-        let gs: Vec<f64> = (0..k)
-            .map(|_| est.estimate(&[0.0], 0.5).unwrap().gradient[0])
-            .collect();
-        let mean = gs.iter().sum::<f64>() / k as f64;
-        let sd = (gs.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / (k - 1) as f64).sqrt();
-        assert!((mean - truth).abs() < 5.0 * sd / (k as f64).sqrt());
+        let (mean, se) = mean_and_standard_error(&gradient_draws(&mut est, &[0.0], 0.5, 20_000)[0]);
+        assert!((mean - truth).abs() < 5.0 * se);
     }
     assert!((normal_cdf(0.6) - 0.725_746_882_249_926_5).abs() < 1e-15);
 }
@@ -244,7 +226,7 @@ fn a_million_dimensions() {
     let n = 1_000_000;
     let theta = vec![0.25; n];
     let f = |x: &[f64]| x[0];
-    for sampling in SAMPLERS {
+    for sampling in Sampling::ALL {
         let mut est = PlateauFreeGradient::new(f).sampling(sampling).seed(2);
         for _ in 0..2 {
             let e = est.estimate(&theta, 0.1).unwrap();

@@ -6,6 +6,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use plateau::{Adam, Annealer, Error, OnFailure, Optimizer, OptimizerState, PlateauFreeGradient};
 
+mod common;
+use common::{bits, tilted_2d};
+
 /// NaN on the bands where `x0 + x1` has a fractional part below 0.3: about a third of the
 /// plane, so most estimates at sigma 0.5 meet it.
 fn banded(x: &[f64]) -> f64 {
@@ -15,10 +18,6 @@ fn banded(x: &[f64]) -> f64 {
     } else {
         (x[0] - 0.2).powi(2) + x[1].abs()
     }
-}
-
-fn bits(v: &[f64]) -> Vec<u64> {
-    v.iter().map(|x| x.to_bits()).collect()
 }
 
 #[test]
@@ -151,14 +150,13 @@ fn uncaught_panics_unwind_as_before() {
 
 #[test]
 fn a_panic_mid_run_keeps_the_state_and_the_run_resumes_bit_identical() {
-    let good = |x: &[f64]| if x[0] + 2.0 * x[1] > 0.3 { 1.0 } else { 0.0 };
     let calls = AtomicUsize::new(0);
-    // The same function, except that its 57th call (iteration 7 with 8 samples) panics.
+    // The tilted step, except that its 57th call (iteration 7 with 8 samples) panics.
     let flaky = |x: &[f64]| {
         if calls.fetch_add(1, Ordering::SeqCst) == 56 {
             panic!("transient failure");
         }
-        good(x)
+        tilted_2d(x)
     };
     let opt = || {
         Optimizer::new(Adam::new(0.02).unwrap(), Annealer::paper(0.5, 40).unwrap())
@@ -166,7 +164,7 @@ fn a_panic_mid_run_keeps_the_state_and_the_run_resumes_bit_identical() {
     };
     let whole = opt()
         .minimize(
-            &mut PlateauFreeGradient::new(good).samples(8).seed(3),
+            &mut PlateauFreeGradient::new(tilted_2d).samples(8).seed(3),
             &[1.0, 1.0],
         )
         .unwrap();

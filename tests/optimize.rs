@@ -5,24 +5,15 @@
 use std::ops::ControlFlow;
 
 use plateau::baseline::{FiniteDifference, Spsa};
-use plateau::{Adam, Annealer, GradientEstimator, Optimizer, PlateauFreeGradient, Sampling};
+use plateau::{
+    Adam, Annealer, GradientEstimator, Objective, Optimizer, PlateauFreeGradient, Sampling,
+};
 
-const SAMPLERS: [Sampling; 3] = [
-    Sampling::Radial,
-    Sampling::PerCoordinate,
-    Sampling::Gaussian,
-];
+mod common;
+use common::tilted_2d;
 
 fn step_1d(x: &[f64]) -> f64 {
     if x[0] > 0.5 {
-        1.0
-    } else {
-        0.0
-    }
-}
-
-fn tilted_2d(x: &[f64]) -> f64 {
-    if x[0] + 2.0 * x[1] > 0.3 {
         1.0
     } else {
         0.0
@@ -51,19 +42,39 @@ fn run<G: GradientEstimator>(
     history.last_theta().unwrap().to_vec()
 }
 
+/// The paper's loop (`lr`, `sigma0`, `iterations` as in [`run`]) from `start` with the
+/// smoothed estimator, `samples` per estimate, for every sampler and every seed below
+/// `seeds`: `(sampler, seed, final theta)`.
+fn smoothed_runs<F: Objective + Copy>(
+    f: F,
+    samples: usize,
+    seeds: u64,
+    start: &[f64],
+    (lr, sigma0, iterations): (f64, f64, usize),
+) -> Vec<(Sampling, u64, Vec<f64>)> {
+    let mut ends = Vec::new();
+    for sampling in Sampling::ALL {
+        for seed in 0..seeds {
+            let mut grad = PlateauFreeGradient::new(f)
+                .sampling(sampling)
+                .samples(samples)
+                .seed(seed);
+            ends.push((
+                sampling,
+                seed,
+                run(&mut grad, start, lr, sigma0, iterations),
+            ));
+        }
+    }
+    ends
+}
+
 #[test]
 fn one_dimensional_step() {
     // From x = 2 the edge at 0.5 is 1.5 away: a plateau for any local method.
-    for sampling in SAMPLERS {
-        for seed in 0..3 {
-            let mut grad = PlateauFreeGradient::new(step_1d)
-                .sampling(sampling)
-                .samples(4)
-                .seed(seed);
-            let x = run(&mut grad, &[2.0], 0.05, 1.0, 300);
-            assert!(x[0] < 0.5, "{sampling:?} seed {seed}: {x:?}");
-            assert_eq!(step_1d(&x), 0.0);
-        }
+    for (sampling, seed, x) in smoothed_runs(step_1d, 4, 3, &[2.0], (0.05, 1.0, 300)) {
+        assert!(x[0] < 0.5, "{sampling:?} seed {seed}: {x:?}");
+        assert_eq!(step_1d(&x), 0.0);
     }
 }
 
@@ -71,15 +82,8 @@ fn one_dimensional_step() {
 fn tilted_step_from_the_plateau() {
     // Start (1, 1): x + 2y = 3, 2.7 above the edge, 2.4 smoothed widths at sigma0 = 0.5.
     // The per-coordinate sampler's mean is biased here but still points off the plateau.
-    for sampling in SAMPLERS {
-        for seed in 0..3 {
-            let mut grad = PlateauFreeGradient::new(tilted_2d)
-                .sampling(sampling)
-                .samples(8)
-                .seed(seed);
-            let x = run(&mut grad, &[1.0, 1.0], 0.02, 0.5, 200);
-            assert_eq!(tilted_2d(&x), 0.0, "{sampling:?} seed {seed}: {x:?}");
-        }
+    for (sampling, seed, x) in smoothed_runs(tilted_2d, 8, 3, &[1.0, 1.0], (0.02, 0.5, 200)) {
+        assert_eq!(tilted_2d(&x), 0.0, "{sampling:?} seed {seed}: {x:?}");
     }
 }
 
@@ -90,22 +94,14 @@ fn tilted_step_from_the_plateau() {
 fn separable_steps_in_150_dimensions() {
     let c = edges();
     let f = |x: &[f64]| x.iter().zip(&c).filter(|(xi, ci)| xi > ci).count() as f64;
-    let start = vec![1.0; 150];
-    for sampling in SAMPLERS {
-        for seed in 0..2 {
-            let mut grad = PlateauFreeGradient::new(f)
-                .sampling(sampling)
-                .samples(64)
-                .seed(seed);
-            let x = run(&mut grad, &start, 0.02, 0.5, 600);
-            assert_eq!(f(&x), 0.0, "{sampling:?} seed {seed}");
-            let worst = x
-                .iter()
-                .zip(&c)
-                .map(|(xi, ci)| xi - ci)
-                .fold(f64::MIN, f64::max);
-            assert!(worst < -0.2, "{sampling:?} seed {seed}: {worst}");
-        }
+    for (sampling, seed, x) in smoothed_runs(&f, 64, 2, &[1.0; 150], (0.02, 0.5, 600)) {
+        assert_eq!(f(&x), 0.0, "{sampling:?} seed {seed}");
+        let worst = x
+            .iter()
+            .zip(&c)
+            .map(|(xi, ci)| xi - ci)
+            .fold(f64::MIN, f64::max);
+        assert!(worst < -0.2, "{sampling:?} seed {seed}: {worst}");
     }
 }
 

@@ -10,20 +10,11 @@ use plateau::{
     PlateauFreeGradient,
 };
 
-fn tilted(x: &[f64]) -> f64 {
-    if x[0] + 2.0 * x[1] > 0.3 {
-        1.0
-    } else {
-        0.0
-    }
-}
+mod common;
+use common::{bits, tilted_2d};
 
 fn optimizer(record: bool) -> Optimizer {
     Optimizer::new(Adam::new(0.02).unwrap(), Annealer::paper(0.5, 60).unwrap()).record_theta(record)
-}
-
-fn bits(v: &[f64]) -> Vec<u64> {
-    v.iter().map(|x| x.to_bits()).collect()
 }
 
 /// Through JSON when the feature is on, else a clone: what a checkpoint file would do.
@@ -71,7 +62,7 @@ fn run_with_stops<G: GradientEstimator>(
 
 #[test]
 fn interrupted_saved_and_resumed_is_bit_identical() {
-    let make = || PlateauFreeGradient::new(tilted).samples(8).seed(11);
+    let make = || PlateauFreeGradient::new(tilted_2d).samples(8).seed(11);
     for record in [false, true] {
         let whole = optimizer(record)
             .minimize(&mut make(), &[1.0, 1.0])
@@ -86,7 +77,7 @@ fn interrupted_saved_and_resumed_is_bit_identical() {
 
 #[test]
 fn resume_works_for_the_baselines_too() {
-    let make = || Spsa::new(tilted).seed(5);
+    let make = || Spsa::new(tilted_2d).seed(5);
     let whole = optimizer(true).minimize(&mut make(), &[1.0, 1.0]).unwrap();
     let resumed = run_with_stops(make, true, &[9, 30]);
     assert_eq!(resumed.history, whole);
@@ -94,7 +85,7 @@ fn resume_works_for_the_baselines_too() {
 
 #[test]
 fn a_finished_state_continues_as_a_no_op() {
-    let mut grad = PlateauFreeGradient::new(tilted).samples(4);
+    let mut grad = PlateauFreeGradient::new(tilted_2d).samples(4);
     let end = optimizer(false)
         .minimize_from(&mut grad, OptimizerState::new(&[1.0, 1.0]).unwrap(), |_| {
             ControlFlow::Continue(())
@@ -108,7 +99,7 @@ fn a_finished_state_continues_as_a_no_op() {
 
 /// A state after a few iterations, to be damaged.
 fn some_state() -> OptimizerState {
-    let mut grad = PlateauFreeGradient::new(tilted).samples(4).seed(2);
+    let mut grad = PlateauFreeGradient::new(tilted_2d).samples(4).seed(2);
     optimizer(true)
         .minimize_from(&mut grad, OptimizerState::new(&[0.2, 0.1]).unwrap(), |s| {
             if s.iteration == 4 {
@@ -136,7 +127,7 @@ fn bad_states_are_refused_whole() {
         let mut state = some_state();
         damage(&mut state);
         let mut opt = optimizer(true);
-        let mut grad = PlateauFreeGradient::new(tilted).samples(4).seed(2);
+        let mut grad = PlateauFreeGradient::new(tilted_2d).samples(4).seed(2);
         let err = opt
             .minimize_from(&mut grad, state.clone(), |_| ControlFlow::Continue(()))
             .unwrap_err();

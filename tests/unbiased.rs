@@ -19,7 +19,10 @@ use plateau::kernel::normal_cdf;
 use plateau::{PlateauFreeGradient, Sampling};
 use proptest::collection::vec;
 use proptest::prelude::*;
-use proptest::test_runner::{Config, RngSeed};
+use proptest::test_runner::{Config, RngSeed, TestCaseError};
+
+mod common;
+use common::{gradient_draws, mean_and_standard_error};
 
 /// Standard errors allowed between the mean estimate and the analytic gradient.
 const Z: f64 = 5.0;
@@ -110,7 +113,7 @@ fn worst_z(mean: &[f64], se: &[f64], truth: &[f64]) -> (usize, f64) {
     worst
 }
 
-/// Runs the criterion; the error names the sampler, the coordinate and the numbers.
+/// Runs the criterion; the failure names the sampler, the coordinate and the numbers.
 fn check<F: Fn(&[f64]) -> f64>(
     f: F,
     setup: Setup,
@@ -118,19 +121,19 @@ fn check<F: Fn(&[f64]) -> f64>(
     spreads: &[f64],
     truth: &[f64],
     seed: u64,
-) -> Result<(), String> {
+) -> Result<(), TestCaseError> {
     let (mean, se) = mean_and_se(f, setup, theta, spreads, K, seed);
     let (i, z) = worst_z(&mean, &se, truth);
     if z <= Z {
         Ok(())
     } else {
-        Err(format!(
+        Err(TestCaseError::fail(format!(
             "{setup:?} n={}: coordinate {i}: mean {} truth {} se {} ({z:.2} standard errors)",
             theta.len(),
             mean[i],
             truth[i],
             se[i]
-        ))
+        )))
     }
 }
 
@@ -159,7 +162,7 @@ fn check_exact<F: Fn(&[f64]) -> f64>(
     spreads: &[f64],
     truth: &[f64],
     seed: u64,
-) -> Result<(), String> {
+) -> Result<(), TestCaseError> {
     let mut setups = exact_setups(samples, antithetic, orthogonal);
     if per_coordinate_exact {
         setups.push(Setup {
@@ -196,6 +199,31 @@ fn point(max_n: usize) -> impl Strategy<Value = (Vec<f64>, Vec<f64>)> {
     (1..=max_n).prop_flat_map(|n| (vec(-2.0..2.0f64, n), vec(0.1..2.0f64, n)))
 }
 
+/// A point `(theta, spreads)` and a plane near it: the normal's raw coordinates in
+/// [-1, 1]^50 and the offset `m` in [-2, 2] smoothed widths, both handed to [`plane`].
+type PlaneCase = ((Vec<f64>, Vec<f64>), Vec<f64>, f64);
+
+/// Theta within two smoothed widths of the plane (`|m| <= 2`): further out, hits of a step
+/// are so rare in `K` estimates that the mean is no longer near normal.
+fn plane_case() -> impl Strategy<Value = PlaneCase> {
+    (point(50), vec(-1.0..1.0f64, 50), -2.0..2.0f64)
+}
+
+/// `check_exact` for `f(x) = h(a.x - b)` on the plane of `case`, whose smoothed gradient is
+/// `grad(a, b, theta, spreads)`.
+fn check_on_plane(
+    h: impl Fn(f64) -> f64,
+    grad: fn(&[f64], f64, &[f64], &[f64]) -> Vec<f64>,
+    ((theta, spreads), a, m): PlaneCase,
+    opts: (usize, bool, bool),
+    seed: u64,
+) -> Result<(), TestCaseError> {
+    let (a, b) = plane(&a, m, &theta, &spreads);
+    let f = |x: &[f64]| h(dot(&a, x) - b);
+    let truth = grad(&a, b, &theta, &spreads);
+    check_exact(f, opts, theta.len() == 1, &theta, &spreads, &truth, seed)
+}
+
 // ---------------------------------------------------------------------------------------
 // Analytic smoothed gradients for N(0, diag(s^2)).
 
@@ -219,6 +247,19 @@ fn exp_grad(a: &[f64], x: &[f64], s: &[f64]) -> Vec<f64> {
     a.iter().map(|ai| ai * q).collect()
 }
 
+/// The gradient of a product of one-coordinate factors `prod_j v_j(x_j)`, from each
+/// factor's value `val[j]` and derivative `der[j]`: coordinate `i` is `der[i]` times the
+/// other factors' values.
+fn product_rule(val: &[f64], der: &[f64]) -> Vec<f64> {
+    (0..val.len())
+        .map(|i| {
+            (0..val.len())
+                .map(|j| if j == i { der[j] } else { val[j] })
+                .product()
+        })
+        .collect()
+}
+
 /// `prod sin(a_i x_i)`: each factor smooths to `sin(a_i x_i) exp(-a_i^2 s_i^2 / 2)`, and
 /// the factors stay independent; product rule.
 fn sines_grad(a: &[f64], x: &[f64], s: &[f64]) -> Vec<f64> {
@@ -230,13 +271,7 @@ fn sines_grad(a: &[f64], x: &[f64], s: &[f64]) -> Vec<f64> {
     let der: Vec<f64> = (0..n)
         .map(|i| a[i] * (a[i] * x[i]).cos() * damp[i])
         .collect();
-    (0..n)
-        .map(|i| {
-            (0..n)
-                .map(|j| if j == i { der[j] } else { val[j] })
-                .product()
-        })
-        .collect()
+    product_rule(&val, &der)
 }
 
 /// `S = sqrt(sum a_i^2 s_i^2)` and `m = (a.x - b) / S`: `a.(x + tau)` is `N(a.x, S^2)`.
@@ -283,13 +318,7 @@ fn box_grad(l: &[f64], u: &[f64], x: &[f64], s: &[f64]) -> Vec<f64> {
     let der: Vec<f64> = (0..n)
         .map(|i| (phi((l[i] - x[i]) / s[i]) - phi((u[i] - x[i]) / s[i])) / s[i])
         .collect();
-    (0..n)
-        .map(|i| {
-            (0..n)
-                .map(|j| if j == i { der[j] } else { val[j] })
-                .product()
-        })
-        .collect()
+    product_rule(&val, &der)
 }
 
 fn in_box(l: &[f64], u: &[f64], x: &[f64]) -> f64 {
@@ -318,7 +347,7 @@ proptest! {
         (theta, spreads) in point(50),
         entries in vec(-1.0..1.0f64, 2500),
         b in vec(-1.0..1.0f64, 50),
-        (samples, antithetic, orthogonal) in options(),
+        opts in options(),
         seed in any::<u64>(),
     ) {
         let n = theta.len();
@@ -329,8 +358,7 @@ proptest! {
             ax + dot(b, x)
         };
         let truth = quadratic_grad(a, b, &theta);
-        let r = check_exact(f, (samples, antithetic, orthogonal), true, &theta, &spreads, &truth, seed);
-        prop_assert!(r.is_ok(), "{}", r.unwrap_err());
+        check_exact(f, opts, true, &theta, &spreads, &truth, seed)?;
     }
 
     /// `exp(a.x)`, with `|a| <= 1` so that the estimator's variance (which grows like
@@ -347,8 +375,7 @@ proptest! {
         let f = |x: &[f64]| dot(&a, x).exp();
         let truth = exp_grad(&a, &theta, &spreads);
         for setup in exact_setups(samples, antithetic, orthogonal) {
-            let r = check(f, setup, &theta, &spreads, &truth, seed);
-            prop_assert!(r.is_ok(), "{}", r.unwrap_err());
+            check(f, setup, &theta, &spreads, &truth, seed)?;
         }
     }
 
@@ -358,49 +385,27 @@ proptest! {
     fn product_of_sines(
         (theta, spreads) in point(50),
         a in vec(0.3..2.0f64, 50),
-        (samples, antithetic, orthogonal) in options(),
+        opts in options(),
         seed in any::<u64>(),
     ) {
         let n = theta.len();
         let a = &a[..n];
         let f = |x: &[f64]| x.iter().zip(a).map(|(xi, ai)| (ai * xi).sin()).product::<f64>();
         let truth = sines_grad(a, &theta, &spreads);
-        let r = check_exact(f, (samples, antithetic, orthogonal), theta.len() == 1, &theta, &spreads, &truth, seed);
-        prop_assert!(r.is_ok(), "{}", r.unwrap_err());
+        check_exact(f, opts, theta.len() == 1, &theta, &spreads, &truth, seed)?;
     }
 
-    /// The canonical plateau `1[a.x > b]`, placed so that theta is within two smoothed
-    /// widths of the step (`|m| <= 2`): further out, hits of the step are so rare in `K`
-    /// estimates that the mean is no longer near normal.
+    /// The canonical plateau `1[a.x > b]` (`a.x - b > 0` is `a.x > b` exactly in floating
+    /// point), theta within two smoothed widths of the step.
     #[test]
-    fn tilted_step(
-        (theta, spreads) in point(50),
-        a in vec(-1.0..1.0f64, 50),
-        m in -2.0..2.0f64,
-        (samples, antithetic, orthogonal) in options(),
-        seed in any::<u64>(),
-    ) {
-        let (a, b) = plane(&a, m, &theta, &spreads);
-        let f = |x: &[f64]| if dot(&a, x) > b { 1.0 } else { 0.0 };
-        let truth = step_grad(&a, b, &theta, &spreads);
-        let r = check_exact(f, (samples, antithetic, orthogonal), theta.len() == 1, &theta, &spreads, &truth, seed);
-        prop_assert!(r.is_ok(), "{}", r.unwrap_err());
+    fn tilted_step(case in plane_case(), opts in options(), seed in any::<u64>()) {
+        check_on_plane(|d| if d > 0.0 { 1.0 } else { 0.0 }, step_grad, case, opts, seed)?;
     }
 
     /// `max(a.x - b, 0)`, the kink of a plateau's edge.
     #[test]
-    fn relu(
-        (theta, spreads) in point(50),
-        a in vec(-1.0..1.0f64, 50),
-        m in -2.0..2.0f64,
-        (samples, antithetic, orthogonal) in options(),
-        seed in any::<u64>(),
-    ) {
-        let (a, b) = plane(&a, m, &theta, &spreads);
-        let f = |x: &[f64]| (dot(&a, x) - b).max(0.0);
-        let truth = relu_grad(&a, b, &theta, &spreads);
-        let r = check_exact(f, (samples, antithetic, orthogonal), theta.len() == 1, &theta, &spreads, &truth, seed);
-        prop_assert!(r.is_ok(), "{}", r.unwrap_err());
+    fn relu(case in plane_case(), opts in options(), seed in any::<u64>()) {
+        check_on_plane(|d| d.max(0.0), relu_grad, case, opts, seed)?;
     }
 
     /// A box indicator. Coordinate 0's edges are at -1 to 3 spreads from theta, so theta may
@@ -412,7 +417,7 @@ proptest! {
         lo in vec(1.5..4.0f64, 50),
         hi in vec(1.5..4.0f64, 50),
         (lo0, width0) in (-1.0..3.0f64, 0.5..4.0f64),
-        (samples, antithetic, orthogonal) in options(),
+        opts in options(),
         seed in any::<u64>(),
     ) {
         let n = theta.len();
@@ -423,8 +428,7 @@ proptest! {
         u[0] = l[0] + width0 * spreads[0];
         let f = |x: &[f64]| in_box(&l, &u, x);
         let truth = box_grad(&l, &u, &theta, &spreads);
-        let r = check_exact(f, (samples, antithetic, orthogonal), theta.len() == 1, &theta, &spreads, &truth, seed);
-        prop_assert!(r.is_ok(), "{}", r.unwrap_err());
+        check_exact(f, opts, theta.len() == 1, &theta, &spreads, &truth, seed)?;
     }
 
     /// `|x|` in one dimension: `d/dx E|x + tau| = 2 Phi(x / s) - 1`. All three samplers.
@@ -438,8 +442,7 @@ proptest! {
         let truth = [2.0 * normal_cdf(x / s) - 1.0];
         for sampling in [Sampling::Radial, Sampling::PerCoordinate, Sampling::Gaussian] {
             let setup = Setup { sampling, samples, antithetic, orthogonal: false };
-            let r = check(|v: &[f64]| v[0].abs(), setup, &[x], &[s], &truth, seed);
-            prop_assert!(r.is_ok(), "{}", r.unwrap_err());
+            check(|v: &[f64]| v[0].abs(), setup, &[x], &[s], &truth, seed)?;
         }
     }
 
@@ -474,8 +477,7 @@ proptest! {
             .collect();
         for sampling in [Sampling::PerCoordinate, Sampling::Radial, Sampling::Gaussian] {
             let setup = Setup { sampling, samples, antithetic, orthogonal: false };
-            let r = check(f, setup, &theta, &spreads, &truth, seed);
-            prop_assert!(r.is_ok(), "{}", r.unwrap_err());
+            check(f, setup, &theta, &spreads, &truth, seed)?;
         }
     }
 }
@@ -505,19 +507,10 @@ fn scalar_sigma_fixed_cases() {
                 .sampling(sampling)
                 .samples(4)
                 .seed(n as u64);
-            let gs: Vec<Vec<f64>> = (0..K)
-                .map(|_| est.estimate(&theta, sigma).unwrap().gradient)
-                .collect();
-            let mean: Vec<f64> = (0..n)
-                .map(|i| gs.iter().map(|g| g[i]).sum::<f64>() / K as f64)
-                .collect();
-            let se: Vec<f64> = (0..n)
-                .map(|i| {
-                    let v =
-                        gs.iter().map(|g| (g[i] - mean[i]).powi(2)).sum::<f64>() / (K - 1) as f64;
-                    (v / K as f64).sqrt()
-                })
-                .collect();
+            let (mean, se): (Vec<f64>, Vec<f64>) = gradient_draws(&mut est, &theta, sigma, K)
+                .iter()
+                .map(|coordinate| mean_and_standard_error(coordinate))
+                .unzip();
             let (i, z) = worst_z(&mean, &se, &truth);
             assert!(
                 z <= Z,

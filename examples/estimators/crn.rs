@@ -9,7 +9,7 @@ use plateau::{Sampling, Seeded};
 
 use crate::cases::{cases, dot};
 use crate::measure::{measure, measure_relative_to, reps_for, Config};
-use crate::report::fmt_num;
+use crate::report::{fmt_num, table_header};
 
 /// A uniform in [-1, 1) from a seed.
 pub(crate) fn noise(seed: u64) -> f64 {
@@ -107,12 +107,22 @@ pub(crate) fn write_crn(page: &mut String, rows: &[CrnRow]) {
          and by how much sharing the seed divides it.\n"
     )
     .unwrap();
-    writeln!(
+    table_header(
         page,
-        "| n | A | sampler | N | noise-free | shared seed | independent noise | independent / shared | noise term alone: shared | independent | ratio |"
-    )
-    .unwrap();
-    writeln!(page, "|---|---|---|---|---|---|---|---|---|---|---|").unwrap();
+        &[
+            "n",
+            "A",
+            "sampler",
+            "N",
+            "noise-free",
+            "shared seed",
+            "independent noise",
+            "independent / shared",
+            "noise term alone: shared",
+            "independent",
+            "ratio",
+        ],
+    );
     for r in rows {
         writeln!(
             page,

@@ -32,7 +32,7 @@ use plateau::seeding::mix;
 use cases::cases;
 use crn::{common_random_numbers, write_crn};
 use measure::{configs, measure, reps_for};
-use report::{cost, fmt_num, pct, summary};
+use report::{cost, dimension_header, fmt_num, pct, summary};
 
 pub(crate) const DIMENSIONS: [usize; 5] = [1, 2, 10, 150, 49_152];
 pub(crate) const SIGMA: f64 = 0.5;
@@ -135,12 +135,7 @@ fn main() {
     writeln!(page, "## Full tables\n").unwrap();
     for (fi, name) in names.iter().enumerate() {
         writeln!(page, "### {name}\n").unwrap();
-        write!(page, "| sampler | antithetic | orthogonal | N |").unwrap();
-        for n in DIMENSIONS {
-            write!(page, " n = {n} |").unwrap();
-        }
-        writeln!(page).unwrap();
-        writeln!(page, "|---|---|---|---|{}", "---|".repeat(DIMENSIONS.len())).unwrap();
+        dimension_header(&mut page, &["sampler", "antithetic", "orthogonal", "N"]);
         for (ci, config) in configs.iter().enumerate() {
             write!(page, "| {} |", config.label()).unwrap();
             for s in &results[fi][ci] {

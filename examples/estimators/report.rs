@@ -33,13 +33,11 @@ pub(crate) fn pct(x: f64) -> String {
     }
 }
 
-pub(crate) fn find(
-    configs: &[Config],
-    sampling: Sampling,
-    anti: bool,
-    orth: bool,
-    samples: usize,
-) -> usize {
+/// A configuration by `(sampler, antithetic, orthogonal, N)`.
+type Key = (Sampling, bool, bool, usize);
+
+/// The index of configuration `key` in `configs`.
+pub(crate) fn find(configs: &[Config], (sampling, anti, orth, samples): Key) -> usize {
     configs
         .iter()
         .position(|c| {
@@ -49,6 +47,26 @@ pub(crate) fn find(
                 && c.samples == samples
         })
         .expect("configuration measured")
+}
+
+/// A Markdown table's header row and the separator under it: `| a | b |`, `|---|---|`.
+pub(crate) fn table_header<S: AsRef<str>>(page: &mut String, columns: &[S]) {
+    page.push('|');
+    for column in columns {
+        write!(page, " {} |", column.as_ref()).unwrap();
+    }
+    writeln!(page, "\n|{}", "---|".repeat(columns.len())).unwrap();
+}
+
+/// The header of a table with the columns `leading` and then one column per dimension.
+pub(crate) fn dimension_header(page: &mut String, leading: &[&str]) {
+    let dimensions = DIMENSIONS.iter().map(|n| format!("n = {n}"));
+    let columns: Vec<String> = leading
+        .iter()
+        .map(|c| c.to_string())
+        .chain(dimensions)
+        .collect();
+    table_header(page, &columns);
 }
 
 /// Ratios of rel. MSE / eval between two configurations, per function and dimension, with
@@ -61,12 +79,7 @@ pub(crate) fn ratio_table(
     (num, den): (usize, usize),
 ) {
     writeln!(page, "{title}\n").unwrap();
-    write!(page, "| function |").unwrap();
-    for n in DIMENSIONS {
-        write!(page, " n = {n} |").unwrap();
-    }
-    writeln!(page).unwrap();
-    writeln!(page, "|---|{}", "---|".repeat(DIMENSIONS.len())).unwrap();
+    dimension_header(page, &["function"]);
     let mut logs = vec![0.0; DIMENSIONS.len()];
     for (fi, name) in names.iter().enumerate() {
         write!(page, "| {name} |").unwrap();
@@ -100,69 +113,46 @@ pub(crate) fn summary(
     let r = Sampling::Radial;
     let g = Sampling::Gaussian;
     let p = Sampling::PerCoordinate;
-    ratio_table(
-        page,
-        "**Orthogonal / independent directions**, radial, antithetic, N = 8 (4 pairs):",
-        names,
-        results,
+    // (title, numerator, denominator)
+    let ratios: [(&str, Key, Key); 6] = [
         (
-            find(configs, r, true, true, 8),
-            find(configs, r, true, false, 8),
+            "**Orthogonal / independent directions**, radial, antithetic, N = 8 (4 pairs):",
+            (r, true, true, 8),
+            (r, true, false, 8),
         ),
-    );
-    ratio_table(
-        page,
-        "**Orthogonal / independent directions**, Gaussian, antithetic, N = 8:",
-        names,
-        results,
         (
-            find(configs, g, true, true, 8),
-            find(configs, g, true, false, 8),
+            "**Orthogonal / independent directions**, Gaussian, antithetic, N = 8:",
+            (g, true, true, 8),
+            (g, true, false, 8),
         ),
-    );
-    ratio_table(
-        page,
-        "**Orthogonal / independent directions**, radial, no pairs, N = 8 (8 draws):",
-        names,
-        results,
         (
-            find(configs, r, false, true, 8),
-            find(configs, r, false, false, 8),
+            "**Orthogonal / independent directions**, radial, no pairs, N = 8 (8 draws):",
+            (r, false, true, 8),
+            (r, false, false, 8),
         ),
-    );
-    ratio_table(
-        page,
-        "**Radial / Gaussian**, antithetic, N = 2:",
-        names,
-        results,
         (
-            find(configs, r, true, false, 2),
-            find(configs, g, true, false, 2),
+            "**Radial / Gaussian**, antithetic, N = 2:",
+            (r, true, false, 2),
+            (g, true, false, 2),
         ),
-    );
-    ratio_table(
-        page,
-        "**Antithetic / no pairs**, radial, N = 8:",
-        names,
-        results,
         (
-            find(configs, r, true, false, 8),
-            find(configs, r, false, false, 8),
+            "**Antithetic / no pairs**, radial, N = 8:",
+            (r, true, false, 8),
+            (r, false, false, 8),
         ),
-    );
-    ratio_table(
-        page,
-        "**Per-coordinate / radial**, antithetic, N = 2 (MSE includes the per-coordinate bias):",
-        names,
-        results,
         (
-            find(configs, p, true, false, 2),
-            find(configs, r, true, false, 2),
+            "**Per-coordinate / radial**, antithetic, N = 2 (MSE includes the per-coordinate bias):",
+            (p, true, false, 2),
+            (r, true, false, 2),
         ),
-    );
+    ];
+    for (title, num, den) in ratios {
+        let pair = (find(configs, num), find(configs, den));
+        ratio_table(page, title, names, results, pair);
+    }
     // The per-coordinate bias in floors.
-    let pc = find(configs, p, true, false, 8);
-    let rad = find(configs, r, true, false, 8);
+    let pc = find(configs, (p, true, false, 8));
+    let rad = find(configs, (r, true, false, 8));
     writeln!(
         page,
         "**Bias in units of its noise floor**, antithetic, N = 8: per-coordinate [its \
@@ -170,12 +160,7 @@ pub(crate) fn summary(
          3.\n"
     )
     .unwrap();
-    write!(page, "| function |").unwrap();
-    for n in DIMENSIONS {
-        write!(page, " n = {n} |").unwrap();
-    }
-    writeln!(page).unwrap();
-    writeln!(page, "|---|{}", "---|".repeat(DIMENSIONS.len())).unwrap();
+    dimension_header(page, &["function"]);
     for (fi, name) in names.iter().enumerate() {
         write!(page, "| {name} |").unwrap();
         for (a, b) in results[fi][pc].iter().zip(&results[fi][rad]) {
@@ -232,12 +217,10 @@ pub(crate) fn cost(page: &mut String) {
         .unwrap();
         return;
     }
-    writeln!(
+    table_header(
         page,
-        "| n | n normals | radial | per-coordinate | Gaussian |"
-    )
-    .unwrap();
-    writeln!(page, "|---|---|---|---|---|").unwrap();
+        &["n", "n normals", "radial", "per-coordinate", "Gaussian"],
+    );
     for n in dims {
         let base = bench_median(n, "normals");
         write!(page, "| {n} | {} |", base.map_or("-".into(), fmt_time)).unwrap();
