@@ -94,7 +94,7 @@ fn tilted_step_from_the_plateau() {
 fn separable_steps_in_150_dimensions() {
     let c = edges();
     let f = |x: &[f64]| x.iter().zip(&c).filter(|(xi, ci)| xi > ci).count() as f64;
-    for (sampling, seed, x) in smoothed_runs(&f, 64, 2, &[1.0; 150], (0.02, 0.5, 600)) {
+    for (sampling, seed, x) in smoothed_runs(f, 64, 2, &[1.0; 150], (0.02, 0.5, 600)) {
         assert_eq!(f(&x), 0.0, "{sampling:?} seed {seed}");
         let worst = x
             .iter()

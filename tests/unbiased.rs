@@ -209,11 +209,15 @@ fn plane_case() -> impl Strategy<Value = PlaneCase> {
     (point(50), vec(-1.0..1.0f64, 50), -2.0..2.0f64)
 }
 
+/// The analytic smoothed gradient of a function of `a.x - b`, as `(a, b, theta, spreads)`
+/// to gradient: [`step_grad`], [`relu_grad`].
+type PlaneGradient = fn(&[f64], f64, &[f64], &[f64]) -> Vec<f64>;
+
 /// `check_exact` for `f(x) = h(a.x - b)` on the plane of `case`, whose smoothed gradient is
 /// `grad(a, b, theta, spreads)`.
 fn check_on_plane(
     h: impl Fn(f64) -> f64,
-    grad: fn(&[f64], f64, &[f64], &[f64]) -> Vec<f64>,
+    grad: PlaneGradient,
     ((theta, spreads), a, m): PlaneCase,
     opts: (usize, bool, bool),
     seed: u64,

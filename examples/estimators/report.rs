@@ -37,7 +37,7 @@ pub(crate) fn pct(x: f64) -> String {
 type Key = (Sampling, bool, bool, usize);
 
 /// The index of configuration `key` in `configs`.
-pub(crate) fn find(configs: &[Config], (sampling, anti, orth, samples): Key) -> usize {
+fn find(configs: &[Config], (sampling, anti, orth, samples): Key) -> usize {
     configs
         .iter()
         .position(|c| {
