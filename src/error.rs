@@ -148,6 +148,35 @@ pub enum Error {
         message: String,
     },
 
+    /// An ask-and-tell run was asked for points while the last asked points still wait for
+    /// their values ([`crate::AskTell::ask`]).
+    #[error("ask called twice: the asked points still wait for their values (tell them first)")]
+    AskPending,
+
+    /// Values were told to an ask-and-tell run with no asked points waiting for them
+    /// ([`crate::AskTell::tell`]).
+    #[error("tell without ask: no asked points wait for values")]
+    NothingAsked,
+
+    /// The wrong number of values was told: one value per asked point, in their order.
+    #[error("tell got {got} values for {expected} asked points")]
+    TellCount {
+        /// The number of asked points.
+        expected: usize,
+        /// The number of values told.
+        got: usize,
+    },
+
+    /// The result of an ask-and-tell run was taken before the run ended
+    /// ([`crate::AskTell::finish`]).
+    #[error("the run is not finished ({evaluations} of at most {budget} evaluations told): ask and tell until ask gives None")]
+    Unfinished {
+        /// Evaluations told so far.
+        evaluations: usize,
+        /// The run's budget.
+        budget: usize,
+    },
+
     /// A lower bound above its upper bound.
     #[error("bounds[{index}]: lower {lower:e} > upper {upper:e} (or not a number)")]
     InvalidBounds {

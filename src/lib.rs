@@ -39,6 +39,11 @@
 //!   ([`Optimizer::minimize_from`]); an error mid-run returns it with the history so far
 //!   ([`RunError`]). A failing objective is reported, resampled ([`OnFailure`]) or, with
 //!   [`PlateauFreeGradient::catch_panics`], caught; see `docs/reliability.md`.
+//! - [`AskTell`] ([`Minimizer::ask_tell`]) and [`PaperAskTell`] ([`Optimizer::ask_tell`]):
+//!   ask and tell, for points evaluated elsewhere (a queue, a game engine, a render farm).
+//!   [`Ask`] gives an iteration's points and one seed per point; `tell` takes their values
+//!   and takes the step. The callback forms are written on them: the same options and seed
+//!   give the same bits ([`NoObjective`] stands in for the objective a run does not need).
 //! - [`baseline`]: finite differences and SPSA, for comparison on the same loop.
 //! - [`kernel`]: the Gaussian kernel, the inverse CDF of its derivative, `c_n`.
 //! - [`seeding`]: how every random stream is seeded (SplitMix64 of the seed, the estimate's
@@ -66,12 +71,31 @@
 //! assert!(x[0] + 2.0 * x[1] < 0.3, "left the plateau: {x:?}");
 //! # Ok::<(), plateau::Error>(())
 //! ```
+//!
+//! The same search, asked and told: the points go wherever they are evaluated, the values
+//! come back in the points' order.
+//!
+//! ```
+//! use plateau::Minimizer;
+//!
+//! let f = |x: &[f64]| if x[0] + 2.0 * x[1] > 0.3 { 1.0 } else { 0.0 };
+//! let mut run = Minimizer::without_objective().budget(400).seed(1).ask_tell(&[1.0, 1.0])?;
+//! while let Some(ask) = run.ask()? {
+//!     let values: Vec<f64> = ask.iter().map(|(x, _seed)| f(x)).collect();
+//!     run.tell(&values)?;
+//! }
+//! let best = run.finish()?;
+//! assert_eq!(best.fun, 0.0);
+//! assert_eq!(best, Minimizer::new(f).budget(400).seed(1).run(&[1.0, 1.0])?);
+//! # Ok::<(), plateau::Error>(())
+//! ```
 
 #![warn(missing_docs, missing_debug_implementations)]
 
 mod adam;
 mod adaptive;
 mod anneal;
+mod ask_tell;
 pub mod baseline;
 mod check;
 mod error;
@@ -86,6 +110,7 @@ pub mod seeding;
 
 pub use adam::{Adam, AdamMoments};
 pub use anneal::{Annealer, Schedule, PAPER_SIGMA_MIN, PAPER_WARMUP};
+pub use ask_tell::{Ask, AskTell, NoObjective, PaperAskTell};
 pub use error::Error;
 pub use estimator::{Estimate, GradientEstimator, OnFailure, PlateauFreeGradient};
 pub use hessian::{smoothed_hessian, HessianEstimate};

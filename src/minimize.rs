@@ -1,17 +1,12 @@
 //! `minimize(f, x0, budget)`: the entry point for users who bring only a function, a start
 //! and a number of evaluations, and [`Minimizer`], the builder beside it.
 
-use std::cell::{Cell, RefCell};
 use std::fmt;
 
-use crate::adam::Adam;
-use crate::adaptive::{rng, Params, RunEnd, SearchGaussian};
-use crate::anneal::Annealer;
+use crate::ask_tell::{AskTell, NoObjective};
 use crate::check;
 use crate::error::Error;
-use crate::estimator::PlateauFreeGradient;
-use crate::objective::{Objective, Points};
-use crate::optimize::Optimizer;
+use crate::objective::Objective;
 
 /// Minimises `f` from `x0` with at most `budget` evaluations of `f`, with no other setting to
 /// choose: the first thing to try.
@@ -65,10 +60,11 @@ pub enum Strategy {
     /// growth of the spread on plateaus, and restarts from the best point with a doubled
     /// population. Needs no step size or learning rate.
     Adaptive,
-    /// The paper's loop: the plateau-free gradient ([`PlateauFreeGradient`], radial sampler,
-    /// antithetic pairs) with `samples` evaluations per estimate, [`Adam`] with learning rate
-    /// `lr`, and [`Annealer::paper`] from `sigma0` over the iterations the budget allows
-    /// (`(budget - 1) / samples`; the last evaluation is at the final parameters).
+    /// The paper's loop: the plateau-free gradient ([`crate::PlateauFreeGradient`], radial
+    /// sampler, antithetic pairs) with `samples` evaluations per estimate, [`crate::Adam`]
+    /// with learning rate `lr`, and [`crate::Annealer::paper`] from `sigma0` over the
+    /// iterations the budget allows (`(budget - 1) / samples`; the last evaluation is at the
+    /// final parameters).
     Paper {
         /// `N`, evaluations of `f` per gradient estimate (even).
         samples: usize,
@@ -150,45 +146,30 @@ pub struct Minimum {
 /// of an iteration (common random numbers), a new one each iteration.
 pub struct Minimizer<F> {
     objective: F,
-    budget: Option<usize>,
-    seed: u64,
-    sigma0: Option<f64>,
-    bounds: Option<(Vec<f64>, Vec<f64>)>,
-    target: Option<f64>,
-    population: Option<usize>,
-    restarts: bool,
-    mirrored: bool,
-    flat_growth: bool,
-    metric: Metric,
-    restart_from_best: bool,
-    strategy: Strategy,
+    options: Options,
 }
 
-impl<F> fmt::Debug for Minimizer<F> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("Minimizer")
-            .field("budget", &self.budget)
-            .field("seed", &self.seed)
-            .field("sigma0", &self.sigma0)
-            .field("bounds", &self.bounds)
-            .field("target", &self.target)
-            .field("population", &self.population)
-            .field("restarts", &self.restarts)
-            .field("mirrored", &self.mirrored)
-            .field("flat_growth", &self.flat_growth)
-            .field("metric", &self.metric)
-            .field("strategy", &self.strategy)
-            .finish_non_exhaustive()
-    }
+/// A [`Minimizer`]'s options: everything but the objective, which is all an ask-and-tell
+/// run needs.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Options {
+    pub(crate) budget: Option<usize>,
+    pub(crate) seed: u64,
+    pub(crate) sigma0: Option<f64>,
+    pub(crate) bounds: Option<(Vec<f64>, Vec<f64>)>,
+    pub(crate) target: Option<f64>,
+    pub(crate) population: Option<usize>,
+    pub(crate) restarts: bool,
+    pub(crate) mirrored: bool,
+    pub(crate) flat_growth: bool,
+    pub(crate) metric: Metric,
+    pub(crate) restart_from_best: bool,
+    pub(crate) strategy: Strategy,
 }
 
-impl<F: Objective> Minimizer<F> {
-    /// A minimiser of `objective`: any `Fn(&[f64]) -> f64`, a [`crate::Seeded`] or
-    /// [`crate::Batch`] closure (a batch objective receives a whole iteration's points at
-    /// once), or your own [`Objective`].
-    pub fn new(objective: F) -> Self {
-        Minimizer {
-            objective,
+impl Default for Options {
+    fn default() -> Self {
+        Options {
             budget: None,
             seed: 0,
             sigma0: None,
@@ -203,16 +184,66 @@ impl<F: Objective> Minimizer<F> {
             strategy: Strategy::Adaptive,
         }
     }
+}
 
+impl<F> fmt::Debug for Minimizer<F> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let o = &self.options;
+        f.debug_struct("Minimizer")
+            .field("budget", &o.budget)
+            .field("seed", &o.seed)
+            .field("sigma0", &o.sigma0)
+            .field("bounds", &o.bounds)
+            .field("target", &o.target)
+            .field("population", &o.population)
+            .field("restarts", &o.restarts)
+            .field("mirrored", &o.mirrored)
+            .field("flat_growth", &o.flat_growth)
+            .field("metric", &o.metric)
+            .field("strategy", &o.strategy)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<F: Objective> Minimizer<F> {
+    /// A minimiser of `objective`: any `Fn(&[f64]) -> f64`, a [`crate::Seeded`] or
+    /// [`crate::Batch`] closure (a batch objective receives a whole iteration's points at
+    /// once), or your own [`Objective`].
+    pub fn new(objective: F) -> Self {
+        Minimizer {
+            objective,
+            options: Options::default(),
+        }
+    }
+}
+
+impl Minimizer<NoObjective> {
+    /// The options alone, for a run whose points are evaluated elsewhere
+    /// ([`Minimizer::ask_tell`]): it has the builder methods but no `run`.
+    ///
+    /// ```
+    /// let run = plateau::Minimizer::without_objective().budget(100).ask_tell(&[1.0, 2.0])?;
+    /// assert!(!run.is_done());
+    /// # Ok::<(), plateau::Error>(())
+    /// ```
+    pub fn without_objective() -> Self {
+        Minimizer {
+            objective: NoObjective,
+            options: Options::default(),
+        }
+    }
+}
+
+impl<F> Minimizer<F> {
     /// The number of evaluations of `f` the run may spend (default: `1000 n`).
     pub fn budget(mut self, budget: usize) -> Self {
-        self.budget = Some(budget);
+        self.options.budget = Some(budget);
         self
     }
 
     /// The seed of every random choice (default 0).
     pub fn seed(mut self, seed: u64) -> Self {
-        self.seed = seed;
+        self.options.seed = seed;
         self
     }
 
@@ -220,25 +251,25 @@ impl<F: Objective> Minimizer<F> {
     /// with [`Minimizer::bounds`], else `max(1, max |x0_i|) / 2`). It adapts from there: a
     /// poor guess costs evaluations, not the result.
     pub fn sigma0(mut self, sigma0: f64) -> Self {
-        self.sigma0 = Some(sigma0);
+        self.options.sigma0 = Some(sigma0);
         self
     }
 
     /// A box: every evaluated point is projected onto it, and restarts stay inside it.
     pub fn bounds(mut self, lower: Vec<f64>, upper: Vec<f64>) -> Self {
-        self.bounds = Some((lower, upper));
+        self.options.bounds = Some((lower, upper));
         self
     }
 
     /// Stop as soon as `f` reaches `target` or below.
     pub fn target(mut self, target: f64) -> Self {
-        self.target = Some(target);
+        self.options.target = Some(target);
         self
     }
 
     /// The population of the first run (default `4 + floor(3 ln n)`); each restart doubles it.
     pub fn population(mut self, population: usize) -> Self {
-        self.population = Some(population);
+        self.options.population = Some(population);
         self
     }
 
@@ -246,40 +277,40 @@ impl<F: Objective> Minimizer<F> {
     /// population while budget remains (default: yes). Off, the run ends with
     /// [`Stop::Converged`].
     pub fn restarts(mut self, restarts: bool) -> Self {
-        self.restarts = restarts;
+        self.options.restarts = restarts;
         self
     }
 
     /// Mirrored (antithetic) draws, `y` and `-y`, as the paper's antithetic pairs (default:
     /// on; it won on Rastrigin and Rosenbrock, see `docs/convergence.md`).
     pub fn mirrored(mut self, mirrored: bool) -> Self {
-        self.mirrored = mirrored;
+        self.options.mirrored = mirrored;
         self
     }
 
     /// Whether the spread grows on generations where half the points tie with the best
     /// (default: yes; the plateau rule).
     pub fn flat_growth(mut self, flat_growth: bool) -> Self {
-        self.flat_growth = flat_growth;
+        self.options.flat_growth = flat_growth;
         self
     }
 
     /// Whether restarts start from the best point seen (default) or from `x0`.
     pub fn restart_from_best(mut self, from_best: bool) -> Self {
-        self.restart_from_best = from_best;
+        self.options.restart_from_best = from_best;
         self
     }
 
     /// The metric the search distribution learns (default [`Metric::Auto`]).
     pub fn metric(mut self, metric: Metric) -> Self {
-        self.metric = metric;
+        self.options.metric = metric;
         self
     }
 
     /// The search method; [`Strategy::Paper`] runs the paper's loop (annealer and Adam) with
     /// the same budget, seed and bounds.
     pub fn strategy(mut self, strategy: Strategy) -> Self {
-        self.strategy = strategy;
+        self.options.strategy = strategy;
         self
     }
 
@@ -288,7 +319,41 @@ impl<F: Objective> Minimizer<F> {
         &self.objective
     }
 
-    fn check(&self, x0: &[f64]) -> Result<usize, Error> {
+    /// An ask-and-tell run from `x0` with these options (the objective, if any, is not
+    /// used): see [`AskTell`].
+    ///
+    /// # Errors
+    /// Bad options or start, as [`Minimizer::run`].
+    pub fn ask_tell(&self, x0: &[f64]) -> Result<AskTell, Error> {
+        AskTell::new(self.options.clone(), x0)
+    }
+}
+
+impl<F: Objective> Minimizer<F> {
+    /// Runs from `x0`: [`Minimizer::ask_tell`], with every asked point evaluated by the
+    /// objective (one [`Objective::evaluate_batch`] call per ask).
+    ///
+    /// # Errors
+    /// Bad options or start ([`Error::EmptyTheta`], [`Error::NonFiniteTheta`],
+    /// [`Error::InvalidParameter`], [`Error::InvalidBounds`], [`Error::LengthMismatch`]), or
+    /// `f` returning NaN or an infinity ([`Error::NonFiniteValue`], with the point).
+    pub fn run(&self, x0: &[f64]) -> Result<Minimum, Error> {
+        let mut run = self.ask_tell(x0)?;
+        let mut values = Vec::new();
+        while let Some(ask) = run.ask()? {
+            values.clear();
+            values.resize(ask.len(), 0.0);
+            self.objective
+                .evaluate_batch(ask.points(), ask.seeds(), &mut values);
+            run.tell(&values)?;
+        }
+        run.finish()
+    }
+}
+
+impl Options {
+    /// Checks the options and the start; returns the budget.
+    pub(crate) fn check(&self, x0: &[f64]) -> Result<usize, Error> {
         check::theta(x0)?;
         let n = x0.len();
         let budget = self.budget.unwrap_or(1000 * n);
@@ -356,263 +421,5 @@ impl<F: Objective> Minimizer<F> {
             check::positive("sigma0", sigma0)?;
         }
         Ok(budget)
-    }
-
-    /// Runs from `x0`.
-    ///
-    /// # Errors
-    /// Bad options or start ([`Error::EmptyTheta`], [`Error::NonFiniteTheta`],
-    /// [`Error::InvalidParameter`], [`Error::InvalidBounds`], [`Error::LengthMismatch`]), or
-    /// `f` returning NaN or an infinity ([`Error::NonFiniteValue`], with the point).
-    pub fn run(&self, x0: &[f64]) -> Result<Minimum, Error> {
-        let budget = self.check(x0)?;
-        match self.strategy {
-            Strategy::Adaptive => self.run_adaptive(x0, budget),
-            Strategy::Paper {
-                samples,
-                lr,
-                sigma0,
-            } => self.run_paper(x0, budget, samples, lr, sigma0),
-        }
-    }
-
-    fn run_adaptive(&self, x0: &[f64], budget: usize) -> Result<Minimum, Error> {
-        let n = x0.len();
-        let (sigma0, scales) = match (&self.bounds, self.sigma0) {
-            (Some((lo, hi)), s) => {
-                let widths: Vec<f64> = lo.iter().zip(hi).map(|(l, u)| u - l).collect();
-                let mean = widths.iter().sum::<f64>() / n as f64;
-                if mean > 0.0 {
-                    let scales = widths.iter().map(|w| (w / mean).max(1e-12)).collect();
-                    (s.unwrap_or(0.25 * mean), scales)
-                } else {
-                    (s.unwrap_or(1.0), vec![1.0; n])
-                }
-            }
-            (None, Some(s)) => (s, vec![1.0; n]),
-            (None, None) => {
-                let big = x0.iter().fold(1.0f64, |a, v| a.max(v.abs()));
-                (0.5 * big, vec![1.0; n])
-            }
-        };
-        let mut rng = rng(self.seed);
-        let mut best = Best {
-            x: x0.to_vec(),
-            fun: f64::INFINITY,
-        };
-        let mut evaluations = 0usize;
-        let mut iterations = 0usize;
-        let mut restarts = 0usize;
-        let mut lambda = self.population.unwrap_or_else(|| Params::default_lambda(n));
-        let mut start = x0.to_vec();
-        let mut flat_buf: Vec<f64> = Vec::new();
-        let mut values: Vec<f64> = Vec::new();
-        loop {
-            let full = match self.metric {
-                Metric::Full => true,
-                Metric::Diagonal => false,
-                Metric::Auto => n <= FULL_METRIC_MAX_DIM,
-            };
-            let mut dist = SearchGaussian::new(&start, sigma0, &scales, lambda, full);
-            dist.mirrored = self.mirrored;
-            dist.flat_growth = self.flat_growth;
-            let end = loop {
-                let generation = dist.sample(&mut rng);
-                let mut ys = generation.ys;
-                let count = ys.len().min(budget - evaluations);
-                ys.truncate(count);
-                flat_buf.clear();
-                for y in ys.iter_mut() {
-                    let mut x = dist.point(y);
-                    if let Some((lo, hi)) = &self.bounds {
-                        let mut moved = false;
-                        for i in 0..n {
-                            let c = x[i].clamp(lo[i], hi[i]);
-                            moved |= c != x[i];
-                            x[i] = c;
-                        }
-                        if moved {
-                            *y = (&x - &dist.mean) / dist.sigma;
-                        }
-                    }
-                    flat_buf.extend(x.iter());
-                }
-                if let Some(index) = flat_buf.iter().position(|v| !v.is_finite()) {
-                    return Err(Error::NonFinitePoint {
-                        sample: evaluations + index / n,
-                        index: index % n,
-                        value: flat_buf[index],
-                    });
-                }
-                values.clear();
-                values.resize(count, 0.0);
-                let seeds = vec![
-                    self.seed ^ (iterations as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-                    count
-                ];
-                self.objective
-                    .evaluate_batch(Points::new(&flat_buf, n), &seeds, &mut values);
-                for (k, &v) in values.iter().enumerate() {
-                    let point = &flat_buf[k * n..(k + 1) * n];
-                    if !v.is_finite() {
-                        return Err(Error::NonFiniteValue {
-                            sample: evaluations + k,
-                            value: v,
-                            point: point.to_vec(),
-                        });
-                    }
-                    if v < best.fun {
-                        best.fun = v;
-                        best.x.copy_from_slice(point);
-                    }
-                }
-                evaluations += count;
-                iterations += 1;
-                if self.target.is_some_and(|t| best.fun <= t) {
-                    return Ok(best.finish(
-                        evaluations,
-                        iterations,
-                        restarts,
-                        dist.sigma,
-                        Stop::Target,
-                    ));
-                }
-                if evaluations >= budget || count < dist.p.lambda {
-                    return Ok(best.finish(
-                        evaluations,
-                        iterations,
-                        restarts,
-                        dist.sigma,
-                        Stop::Budget,
-                    ));
-                }
-                if let Some(end) = dist.update(&ys, &values) {
-                    break end;
-                }
-            };
-            if !self.restarts {
-                let _: RunEnd = end; // why the run ended does not change what happens next
-                return Ok(best.finish(
-                    evaluations,
-                    iterations,
-                    restarts,
-                    dist.sigma,
-                    Stop::Converged,
-                ));
-            }
-            restarts += 1;
-            lambda *= 2;
-            if self.restart_from_best {
-                start.clone_from(&best.x);
-            }
-        }
-    }
-
-    fn run_paper(
-        &self,
-        x0: &[f64],
-        budget: usize,
-        samples: usize,
-        lr: f64,
-        sigma0: f64,
-    ) -> Result<Minimum, Error> {
-        let tracked = Tracked {
-            inner: &self.objective,
-            best: RefCell::new(Best {
-                x: x0.to_vec(),
-                fun: f64::INFINITY,
-            }),
-            evaluations: Cell::new(0),
-        };
-        let iterations = (budget - 1) / samples;
-        let mut adam = Adam::new(lr)?;
-        if let Some((lo, hi)) = &self.bounds {
-            adam = adam.bounds(lo.clone(), hi.clone())?;
-        }
-        let mut theta = x0.to_vec();
-        if iterations > 0 {
-            let mut grad = PlateauFreeGradient::new(&tracked)
-                .samples(samples)
-                .seed(self.seed);
-            let mut opt =
-                Optimizer::new(adam, Annealer::paper(sigma0, iterations)?).record_theta(false);
-            let history = opt.minimize(&mut grad, x0)?;
-            if let Some(t) = history.last_theta() {
-                theta = t.to_vec();
-            }
-        }
-        let v = tracked.evaluate(&theta, self.seed);
-        if !v.is_finite() {
-            return Err(Error::NonFiniteValue {
-                sample: tracked.evaluations.get() - 1,
-                value: v,
-                point: theta,
-            });
-        }
-        let evaluations = tracked.evaluations.get();
-        let sigma = if iterations > 0 {
-            Annealer::paper(sigma0, iterations)?.sigma(iterations - 1)
-        } else {
-            sigma0
-        };
-        let best = tracked.best.into_inner();
-        let stop = if self.target.is_some_and(|t| best.fun <= t) {
-            Stop::Target
-        } else {
-            Stop::Budget
-        };
-        Ok(best.finish(evaluations, iterations, 0, sigma, stop))
-    }
-}
-
-struct Best {
-    x: Vec<f64>,
-    fun: f64,
-}
-
-impl Best {
-    fn finish(
-        self,
-        evaluations: usize,
-        iterations: usize,
-        restarts: usize,
-        sigma: f64,
-        stop: Stop,
-    ) -> Minimum {
-        Minimum {
-            x: self.x,
-            fun: self.fun,
-            evaluations,
-            iterations,
-            restarts,
-            sigma,
-            stop,
-        }
-    }
-}
-
-/// An objective by reference that remembers the best point it was evaluated at.
-struct Tracked<'a, F> {
-    inner: &'a F,
-    best: RefCell<Best>,
-    evaluations: Cell<usize>,
-}
-
-impl<F: Objective> Objective for &Tracked<'_, F> {
-    fn evaluate(&self, point: &[f64], seed: u64) -> f64 {
-        let v = self.inner.evaluate(point, seed);
-        self.evaluations.set(self.evaluations.get() + 1);
-        let mut best = self.best.borrow_mut();
-        if v < best.fun {
-            best.fun = v;
-            best.x.copy_from_slice(point);
-        }
-        v
-    }
-}
-
-impl<F: Objective> Tracked<'_, F> {
-    fn evaluate(&self, point: &[f64], seed: u64) -> f64 {
-        Objective::evaluate(&self, point, seed)
     }
 }

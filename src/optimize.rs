@@ -365,87 +365,123 @@ impl Optimizer {
         G: GradientEstimator + ?Sized,
         O: FnMut(&Step<'_>) -> ControlFlow<()>,
     {
+        let (mut progress, position) = self.resume(state)?;
+        if let Some(position) = position {
+            estimator.set_stream_position(position);
+        }
+        while let Some(sigma) = self.next_sigma(&progress) {
+            let position = estimator.stream_position();
+            // Adam leaves theta and its moments untouched when it fails, and the estimator
+            // does not touch theta: on either error the state is that of the last good
+            // iteration.
+            let result = estimator
+                .estimate(&progress.theta, sigma)
+                .and_then(|e| self.advance(&mut progress, sigma, &e).map(|()| e));
+            let estimate = match result {
+                Ok(estimate) => estimate,
+                Err(error) => {
+                    return Err(RunError {
+                        error,
+                        state: Box::new(self.state_of(progress, position)),
+                    })
+                }
+            };
+            let step = Step {
+                iteration: progress.iteration - 1,
+                theta: &progress.theta,
+                sigma,
+                estimate: &estimate,
+            };
+            if observer(&step).is_break() {
+                progress.history.stopped_early = progress.iteration < self.iterations;
+                break;
+            }
+        }
+        Ok(self.state_of(progress, estimator.stream_position()))
+    }
+
+    /// Unpacks a state to continue from: checks it, sets Adam's moments, clears the
+    /// history's early stop; returns the rest and the stream position to set. Shared by
+    /// [`Optimizer::minimize_from`] and [`Optimizer::ask_tell_from`].
+    pub(crate) fn resume(
+        &mut self,
+        state: OptimizerState,
+    ) -> Result<(Progress, Option<u64>), RunError> {
         if let Err(error) = state.validate() {
             return Err(RunError {
                 error,
                 state: Box::new(state),
             });
         }
-        let OptimizerState {
-            mut iteration,
-            mut theta,
-            adam,
-            stream_position,
-            mut history,
-        } = state;
-        if let Err(error) = self.adam.set_moments(adam.clone()) {
+        if let Err(error) = self.adam.set_moments(state.adam.clone()) {
             // Unreachable after `validate`, but a state is never half-used.
-            let state = OptimizerState {
-                iteration,
-                theta,
-                adam,
-                stream_position,
-                history,
-            };
             return Err(RunError {
                 error,
                 state: Box::new(state),
             });
         }
-        if let Some(position) = stream_position {
-            estimator.set_stream_position(position);
-        }
-        history.stopped_early = false;
-        while iteration < self.iterations {
-            let position = estimator.stream_position();
-            let sigma = self.annealer.sigma(iteration);
-            // Adam leaves theta and its moments untouched when it fails, and the estimator
-            // does not touch theta: on either error the state is that of the last good
-            // iteration.
-            let result = estimator
-                .estimate(&theta, sigma)
-                .and_then(|e| self.adam.step(&mut theta, &e.gradient).map(|()| e));
-            let estimate = match result {
-                Ok(estimate) => estimate,
-                Err(error) => {
-                    let state = OptimizerState {
-                        iteration,
-                        theta,
-                        adam: self.adam.moments(),
-                        stream_position: position,
-                        history,
-                    };
-                    return Err(RunError {
-                        error,
-                        state: Box::new(state),
-                    });
-                }
-            };
-            history.sigma.push(sigma);
-            history.value.push(estimate.mean_value);
-            history.evaluations += estimate.evaluations;
-            match history.theta.last_mut() {
-                Some(last) if !self.record_theta => last.copy_from_slice(&theta),
-                _ => history.theta.push(theta.clone()),
-            }
-            let step = Step {
-                iteration,
-                theta: &theta,
-                sigma,
-                estimate: &estimate,
-            };
-            iteration += 1;
-            if observer(&step).is_break() {
-                history.stopped_early = iteration < self.iterations;
-                break;
-            }
-        }
-        Ok(OptimizerState {
+        let OptimizerState {
             iteration,
             theta,
-            adam: self.adam.moments(),
-            stream_position: estimator.stream_position(),
+            adam: _,
+            stream_position,
+            mut history,
+        } = state;
+        history.stopped_early = false;
+        let progress = Progress {
+            iteration,
+            theta,
             history,
-        })
+        };
+        Ok((progress, stream_position))
     }
+
+    /// The spread of the next iteration, or `None` when the run is complete.
+    pub(crate) fn next_sigma(&self, progress: &Progress) -> Option<f64> {
+        (progress.iteration < self.iterations).then(|| self.annealer.sigma(progress.iteration))
+    }
+
+    /// Completes an iteration: Adam's step along the estimate, and the record. On error
+    /// nothing has changed (Adam leaves theta and its moments untouched when it fails).
+    pub(crate) fn advance(
+        &mut self,
+        progress: &mut Progress,
+        sigma: f64,
+        estimate: &Estimate,
+    ) -> Result<(), Error> {
+        self.adam.step(&mut progress.theta, &estimate.gradient)?;
+        let history = &mut progress.history;
+        history.sigma.push(sigma);
+        history.value.push(estimate.mean_value);
+        history.evaluations += estimate.evaluations;
+        match history.theta.last_mut() {
+            Some(last) if !self.record_theta => last.copy_from_slice(&progress.theta),
+            _ => history.theta.push(progress.theta.clone()),
+        }
+        progress.iteration += 1;
+        Ok(())
+    }
+
+    /// The state of a run at `progress` whose streams stand at `position`.
+    pub(crate) fn state_of(&self, progress: Progress, position: Option<u64>) -> OptimizerState {
+        OptimizerState {
+            iteration: progress.iteration,
+            theta: progress.theta,
+            adam: self.adam.moments(),
+            stream_position: position,
+            history: progress.history,
+        }
+    }
+}
+
+/// A run between iterations: the part of [`OptimizerState`] that neither Adam nor the
+/// estimator holds.
+#[derive(Debug, Clone)]
+pub(crate) struct Progress {
+    /// Iterations completed.
+    pub(crate) iteration: usize,
+    /// The current parameters.
+    pub(crate) theta: Vec<f64>,
+    /// The record of the completed iterations.
+    pub(crate) history: History,
 }

@@ -17,6 +17,9 @@ The main entry points:
   ``method='plateau'``, the paper's loop. Returns an :class:`OptimizeResult`.
 - :class:`Annealer` (``paper``, ``constant``, ``exponential``, ``cosine``), :class:`Adam`
   (with bounds), :class:`Sampling` (``Radial``, ``PerCoordinate``, ``Gaussian``).
+- :func:`ask_tell` -- the same runs with the points evaluated by the caller:
+  ``es = ask_tell(x0, budget=...)``, then ``X, seeds = es.ask()`` and ``es.tell(values)``
+  until ``es.done``; ``es.result`` is :func:`minimize`'s result.
 - :class:`FiniteDifference`, :class:`Spsa` -- the baselines (also in ``plateau.baseline``).
 """
 
@@ -45,12 +48,14 @@ __all__ = [
     "PAPER_WARMUP",
     "Adam",
     "Annealer",
+    "AskTell",
     "FiniteDifference",
     "History",
     "OptimizeResult",
     "PlateauFreeGradient",
     "Sampling",
     "Spsa",
+    "ask_tell",
     "minimize",
 ]
 
@@ -567,3 +572,289 @@ def _evaluate(fun: Callable[..., Any], x: np.ndarray, *, batched: bool, seeded: 
         values = fun(points, np.array([seed], dtype=np.uint64)) if seeded else fun(points)
         return float(np.asarray(values, dtype=np.float64).reshape(-1)[0])
     return float(fun(x.copy(), seed) if seeded else fun(x.copy()))
+
+
+class AskTell:
+    """An optimisation run whose points the caller evaluates: ask and tell.
+
+    Made by :func:`ask_tell`. Each :meth:`ask` hands out one iteration's points and their
+    seeds; each :meth:`tell` takes their values back, finishes the estimate and takes the
+    step. The points can be evaluated anywhere, in any order (a queue, a game engine, a
+    render farm). With the options and seed of a :func:`minimize` call, the run and its
+    :attr:`result` are bit for bit that call's.
+
+    Examples
+    --------
+    >>> import numpy as np, plateau
+    >>> es = plateau.ask_tell([0.0, 0.0, 0.0], budget=600, seed=3)
+    >>> while not es.done:
+    ...     X, seeds = es.ask()
+    ...     es.tell([float(np.sum((np.round(x) - 1.0) ** 2)) for x in X])
+    >>> es.result.fun
+    0.0
+    """
+
+    __slots__ = ("_raw", "_method")
+
+    def __init__(self, raw: Any, method: str) -> None:
+        self._raw = raw
+        self._method = method
+
+    @property
+    def method(self) -> str:
+        """``'adaptive'`` or ``'plateau'`` (the paper's loop)."""
+        return self._method
+
+    @property
+    def done(self) -> bool:
+        """Whether the run has ended (:attr:`result` is ready; :meth:`ask` has nothing more)."""
+        return bool(self._raw.done)
+
+    @property
+    def nfev(self) -> int:
+        """Evaluations told so far."""
+        return int(self._raw.nfev)
+
+    def ask(self) -> tuple[np.ndarray, np.ndarray]:
+        """The next points and their seeds: ``X`` of shape ``(k, *x0.shape)`` (float64) and
+        ``seeds``, a uint64 array of length ``k``.
+
+        The adaptive search asks for one generation (one seed for all its points, a new one
+        each generation); the paper's loop for one gradient estimate (one seed per
+        antithetic pair) and, last, for its final point alone (with ``seed``). An objective
+        with noise of its own should use the seeds (common random numbers): they are the
+        seeds a ``seeded=True`` ``fun`` receives from :func:`minimize`.
+
+        Raises
+        ------
+        ValueError
+            Asked twice without a tell in between, or asked after the run has ended.
+        """
+        out = self._raw.ask()
+        if out is None:
+            raise ValueError("the run has ended: nothing more to ask (see result)")
+        return out
+
+    def tell(self, values: Any) -> None:
+        """Tells the values of the asked points, in the order of ``X``: ``k`` floats.
+
+        Raises
+        ------
+        ValueError
+            Nothing asked, the wrong number of values, or a NaN or an infinity (naming the
+            evaluation, the value and the point). After a ValueError the same points still
+            wait for their values.
+        """
+        array = np.asarray(values, dtype=np.float64).reshape(-1)
+        self._raw.tell(array.tolist())
+
+    @property
+    def best(self) -> Optional[tuple[np.ndarray, float]]:
+        """``(x, fun)``, the best point told so far and its value (``method='adaptive'``);
+        None before the first value and for the paper's loop."""
+        return self._raw.best()
+
+    @property
+    def result(self) -> OptimizeResult:
+        """The result, as :func:`minimize` returns it.
+
+        Raises
+        ------
+        ValueError
+            The run has not ended: ask and tell until :attr:`done`.
+        """
+        raw = self._raw.result()
+        if raw is None:
+            raise ValueError(
+                f"the run has not ended ({self.nfev} evaluations told): ask and tell until done"
+            )
+        if self._method == "adaptive":
+            stop = raw["stop"]
+            return OptimizeResult(
+                x=raw["x"],
+                fun=float(raw["fun"]),
+                nit=int(raw["nit"]),
+                nfev=int(raw["nfev"]),
+                success=True,
+                status=_STOP_STATUS[stop],
+                message=stop,
+                restarts=raw["restarts"],
+                sigma=raw["sigma"],
+                history=None,
+            )
+        history = History(
+            sigma=raw["sigma"],
+            grad_norm=raw["grad_norm"],
+            fun=raw["fun"],
+            nfev=raw["nfev_history"],
+            x=raw.get("x_history"),
+        )
+        nit = int(raw["nit"])
+        nfev = int(raw["nfev"])
+        final = raw["final_value"]
+        if final is not None:
+            value = float(final)
+            nfev += 1
+        else:
+            value = float(history.fun[-1]) if len(history) else math.nan
+        return OptimizeResult(
+            x=raw["x"],
+            fun=value,
+            nit=nit,
+            nfev=nfev,
+            success=True,
+            status=0,
+            message=f"completed {nit} iterations",
+            history=history,
+        )
+
+    def __repr__(self) -> str:
+        state = "done" if self.done else "running"
+        return f"AskTell(method={self._method!r}, {state}, {self.nfev} evaluations told)"
+
+
+def ask_tell(
+    x0: Any,
+    *,
+    budget: Optional[int] = None,
+    method: Optional[str] = None,
+    seed: int = 0,
+    sigma0: Optional[float] = None,
+    bounds: Any = None,
+    target: Optional[float] = None,
+    population: Optional[int] = None,
+    restarts: bool = True,
+    iterations: Optional[int] = None,
+    lr: Optional[float] = None,
+    samples: Optional[int] = None,
+    sampling: Optional[str] = None,
+    antithetic: Optional[bool] = None,
+    orthogonal: Optional[bool] = None,
+    annealer: Any = None,
+    sigma_min: Optional[float] = None,
+    record_x: Optional[bool] = None,
+    final_evaluation: Optional[bool] = None,
+) -> AskTell:
+    """:func:`minimize` without ``fun``: an :class:`AskTell` run whose points you evaluate.
+
+    The options, their defaults and the choice of method are :func:`minimize`'s
+    (``method='adaptive'``, the default with ``budget`` and none of the paper loop's options,
+    or ``'plateau'`` -- also spelt ``'paper'`` -- the paper's loop). With the same options and
+    seed, ``ask_tell(x0, ...).result`` after the loop below is ``minimize(fun, x0, ...)``, bit
+    for bit::
+
+        es = plateau.ask_tell(x0, budget=2000, seed=1)
+        while not es.done:
+            X, seeds = es.ask()                     # (k, *x0.shape) float64, k uint64 seeds
+            es.tell([fun(x) for x in X])            # or fun(x, s) for a seeded fun
+        result = es.result                           # OptimizeResult, as minimize returns
+
+    The baselines (``method='fd'``, ``'spsa'``), ``callback`` and ``parallel`` are
+    :func:`minimize`'s alone: the caller evaluates, and can stop whenever it likes.
+
+    Raises
+    ------
+    ValueError
+        Bad input, as :func:`minimize`.
+    """
+    x0_array = np.asarray(x0, dtype=np.float64)
+    if budget is not None and (isinstance(budget, bool) or int(budget) != budget or budget < 1):
+        raise ValueError(f"budget = {budget!r} must be a whole number of evaluations, at least 1")
+    paper_only = {
+        "iterations": iterations,
+        "lr": lr,
+        "samples": samples,
+        "sampling": sampling,
+        "antithetic": antithetic,
+        "orthogonal": orthogonal,
+        "annealer": annealer,
+        "sigma_min": sigma_min,
+        "record_x": record_x,
+        "final_evaluation": final_evaluation,
+    }
+    if method is None:
+        paper = sigma0 is not None or any(v is not None for v in paper_only.values())
+        method = "adaptive" if budget is not None and not paper else "plateau"
+    method = method.lower()
+    if method == "paper":
+        method = "plateau"
+    if method == "adaptive":
+        given = [name for name, value in paper_only.items() if value is not None]
+        if given:
+            raise ValueError(
+                f"{', '.join(given)}: options of the paper's loop, not of method='adaptive' "
+                "(use budget, or method='plateau')"
+            )
+        box = None
+        if bounds is not None:
+            box = _parse_bounds(bounds, x0_array.shape)
+            for i, (lo, hi) in enumerate(zip(*box)):
+                if not (math.isfinite(lo) and math.isfinite(hi)):
+                    raise ValueError(
+                        f"bounds[{i}] = ({lo}, {hi}): method='adaptive' needs finite bounds "
+                        "(the box sets the starting spread and where restarts go)"
+                    )
+        raw = _plateau._AskTell.adaptive(
+            x0_array,
+            budget=None if budget is None else int(budget),
+            seed=seed,
+            sigma0=sigma0,
+            bounds=box,
+            target=target,
+            population=population,
+            restarts=restarts,
+        )
+        return AskTell(raw, "adaptive")
+    if method != "plateau":
+        raise ValueError(
+            f"method = {method!r} is not a method of ask_tell: use 'adaptive' or 'plateau' "
+            "(the baselines 'fd' and 'spsa' are minimize's alone)"
+        )
+    sigma0 = 0.5 if sigma0 is None else sigma0
+    lr = 0.02 if lr is None else lr
+    samples = 2 if samples is None else samples
+    sampling = "radial" if sampling is None else sampling
+    antithetic = True if antithetic is None else antithetic
+    orthogonal = False if orthogonal is None else orthogonal
+    annealer = "paper" if annealer is None else annealer
+    sigma_min = PAPER_SIGMA_MIN if sigma_min is None else sigma_min
+    record_x = False if record_x is None else record_x
+    final_evaluation = True if final_evaluation is None else final_evaluation
+    # The estimator's own checks, with its messages (it is never evaluated).
+    PlateauFreeGradient(
+        lambda x: 0.0,
+        samples=samples,
+        sampling=str(sampling.value if isinstance(sampling, Sampling) else sampling),
+        antithetic=antithetic,
+        orthogonal=orthogonal,
+    )
+    if iterations is None:
+        if isinstance(annealer, Annealer):
+            iterations = annealer.iterations
+        elif budget is not None:
+            if budget < samples:
+                raise ValueError(
+                    f"budget = {budget} is less than one iteration ({samples} evaluations)"
+                )
+            iterations = budget // samples
+        else:
+            iterations = 400
+    if iterations < 1:
+        raise ValueError(f"iterations = {iterations} must be at least 1")
+    if not isinstance(annealer, Annealer):
+        annealer = Annealer(str(annealer), sigma0=sigma0, sigma_min=sigma_min, iterations=iterations)
+    adam = Adam(lr, bounds=None if bounds is None else _parse_bounds(bounds, x0_array.shape))
+    raw = _plateau._AskTell.paper(
+        x0_array,
+        adam,
+        annealer,
+        iterations,
+        samples=samples,
+        sampling=str(sampling.value if isinstance(sampling, Sampling) else sampling),
+        antithetic=antithetic,
+        orthogonal=orthogonal,
+        seed=seed,
+        record_x=record_x,
+        final_evaluation=final_evaluation,
+    )
+    return AskTell(raw, "plateau")

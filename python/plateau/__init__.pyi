@@ -247,16 +247,64 @@ def minimize(
     ``orthogonal=False``, ``parallel=False``, ``record_x=False``,
     ``final_evaluation=True``)."""
 
+class AskTell:
+    """A run whose points the caller evaluates: ``X, seeds = es.ask()`` (``X`` of shape
+    ``(k, *x0.shape)``, ``seeds`` k uint64), ``es.tell(values)`` (k floats, in the order of
+    ``X``), until ``es.done``; ``es.result`` is :func:`minimize`'s result for the same options
+    and seed. Asking twice, telling without asking, the wrong number of values and non-finite
+    values are ValueErrors (after which the same points still wait for their values)."""
+
+    def __init__(self, raw: Any, method: str) -> None: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def done(self) -> bool: ...
+    @property
+    def nfev(self) -> int: ...
+    def ask(self) -> Tuple[_FloatArray, npt.NDArray[np.uint64]]: ...
+    def tell(self, values: _ArrayLike) -> None: ...
+    @property
+    def best(self) -> Optional[Tuple[_FloatArray, float]]: ...
+    @property
+    def result(self) -> OptimizeResult: ...
+
+def ask_tell(
+    x0: _ArrayLike,
+    *,
+    budget: Optional[int] = None,
+    method: Optional[Literal["adaptive", "plateau", "paper"]] = None,
+    seed: int = 0,
+    sigma0: Optional[float] = None,
+    bounds: Optional[_Bounds] = None,
+    target: Optional[float] = None,
+    population: Optional[int] = None,
+    restarts: bool = True,
+    iterations: Optional[int] = None,
+    lr: Optional[float] = None,
+    samples: Optional[int] = None,
+    sampling: Optional[_SamplingName] = None,
+    antithetic: Optional[bool] = None,
+    orthogonal: Optional[bool] = None,
+    annealer: Union[_ScheduleName, Annealer, None] = None,
+    sigma_min: Optional[float] = None,
+    record_x: Optional[bool] = None,
+    final_evaluation: Optional[bool] = None,
+) -> AskTell:
+    """:func:`minimize` without ``fun``: the same options, defaults and methods
+    (``'adaptive'``, ``'plateau'``/``'paper'``), the points evaluated by the caller."""
+
 __all__ = [
     "PAPER_SIGMA_MIN",
     "PAPER_WARMUP",
     "Adam",
     "Annealer",
+    "AskTell",
     "FiniteDifference",
     "History",
     "OptimizeResult",
     "PlateauFreeGradient",
     "Sampling",
     "Spsa",
+    "ask_tell",
     "minimize",
 ]

@@ -18,6 +18,7 @@ __all__ = [
     "PAPER_WARMUP",
     "PlateauFreeGradient",
     "Spsa",
+    "_AskTell",
     "_minimize",
     "_minimize_adaptive",
     "_rust_reference_estimates",
@@ -25,6 +26,43 @@ __all__ = [
     "_rust_reference_minimize_adaptive",
     "_rust_seconds_per_evaluation",
 ]
+
+class _AskTell:
+    """The Rust side of ``plateau.AskTell``: an adaptive or paper-loop run, asked and told."""
+
+    @staticmethod
+    def adaptive(
+        x0: Any,
+        budget: int | None = None,
+        seed: int = 0,
+        sigma0: float | None = None,
+        bounds: tuple[list[float], list[float]] | None = None,
+        target: float | None = None,
+        population: int | None = None,
+        restarts: bool = True,
+    ) -> _AskTell: ...
+    @staticmethod
+    def paper(
+        x0: Any,
+        adam: Adam,
+        annealer: Annealer,
+        iterations: int,
+        samples: int = 2,
+        sampling: str = "radial",
+        antithetic: bool = True,
+        orthogonal: bool = False,
+        seed: int = 0,
+        record_x: bool = False,
+        final_evaluation: bool = True,
+    ) -> _AskTell: ...
+    def ask(self) -> tuple[Any, Any] | None: ...
+    def tell(self, values: list[float]) -> None: ...
+    @property
+    def done(self) -> bool: ...
+    @property
+    def nfev(self) -> int: ...
+    def best(self) -> tuple[Any, float] | None: ...
+    def result(self) -> dict[str, Any] | None: ...
 
 def _minimize(
     estimator: Any,

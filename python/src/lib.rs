@@ -28,6 +28,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyFloat, PyInt};
 
 mod adaptive;
+mod ask_tell;
 mod convert;
 mod estimators;
 mod objective;
@@ -36,6 +37,7 @@ mod reference;
 mod schedule;
 
 use adaptive::*;
+use ask_tell::*;
 use convert::*;
 use estimators::*;
 use objective::*;
@@ -51,6 +53,7 @@ fn _plateau(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PySpsa>()?;
     m.add_class::<PyAnnealer>()?;
     m.add_class::<PyAdam>()?;
+    m.add_class::<PyAskTell>()?;
     m.add_function(wrap_pyfunction!(_minimize, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_reference_estimates, m)?)?;
     m.add_function(wrap_pyfunction!(_minimize_adaptive, m)?)?;

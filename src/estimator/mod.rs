@@ -9,6 +9,7 @@ mod steps;
 use evaluate::{evaluate_parallel, evaluate_sequential, panic_message};
 use steps::{accumulate, write_points, Spreads, Stream, Uniform};
 
+use crate::ask_tell::NoObjective;
 use crate::check;
 use crate::error::Error;
 use crate::kernel::chi_mean;
@@ -153,10 +154,42 @@ type Panic = Box<dyn Any + Send>;
 /// so later estimates draw fresh perturbations.
 pub struct PlateauFreeGradient<F> {
     objective: F,
+    core: Core,
+    evaluator: Evaluator<F>,
+}
+
+/// The estimator without its objective: the configuration, the count of estimates and the
+/// scratch space. An estimate is [`Core::start`], then per attempt [`Core::draw`] (the points
+/// and their seeds), the values written by whoever evaluates them, and [`Core::finish`]: the
+/// callback form ([`PlateauFreeGradient::estimate`]) and the ask-and-tell form
+/// ([`crate::PaperAskTell`]) are the same calls in the same order.
+pub(crate) struct Core {
     settings: Settings,
     estimates: u64,
-    evaluator: Evaluator<F>,
     buffers: Buffers,
+}
+
+/// An estimate between [`Core::start`] and [`Core::finish`].
+#[derive(Debug)]
+pub(crate) struct Pending {
+    /// The estimate's index (its random streams).
+    pub(crate) index: u64,
+    /// Redraws so far ([`OnFailure::Resample`]); the attempt that [`Core::draw`] makes.
+    resampled: usize,
+    /// Draw 0 of the current attempt, the memory of the gradient to come.
+    first: Vec<f64>,
+    /// Whether theta's finiteness was checked by the caller.
+    theta_checked: bool,
+    /// Theta's dimension.
+    n: usize,
+}
+
+impl Pending {
+    /// Whether the attempt's draws are still there to finish (a failed finish may leave
+    /// them, a finished estimate has used them).
+    pub(crate) fn is_drawn(&self) -> bool {
+        !self.first.is_empty()
+    }
 }
 
 /// The configuration that the builder methods set.
@@ -259,7 +292,7 @@ impl<F> fmt::Debug for PlateauFreeGradient<F> {
     /// The configuration and the count of estimates; the objective by its type's name
     /// (closures have no `Debug`).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let s = &self.settings;
+        let s = &self.core.settings;
         f.debug_struct("PlateauFreeGradient")
             .field("objective", &std::any::type_name::<F>())
             .field("samples", &s.samples)
@@ -270,18 +303,24 @@ impl<F> fmt::Debug for PlateauFreeGradient<F> {
             .field("parallel", &s.parallel)
             .field("on_failure", &s.on_failure)
             .field("catch_panics", &s.catch_panics)
+            .field("estimates", &self.core.estimates)
+            .finish_non_exhaustive()
+    }
+}
+
+impl fmt::Debug for Core {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Core")
+            .field("settings", &self.settings)
             .field("estimates", &self.estimates)
             .finish_non_exhaustive()
     }
 }
 
-impl<F: Objective> PlateauFreeGradient<F> {
-    /// The estimator for `objective`: any `Fn(&[f64]) -> f64`, a [`crate::Seeded`] or
-    /// [`crate::Batch`] closure, or your own [`Objective`].
-    #[must_use]
-    pub fn new(objective: F) -> Self {
-        PlateauFreeGradient {
-            objective,
+impl Default for Core {
+    /// The defaults of [`PlateauFreeGradient::new`].
+    fn default() -> Self {
+        Core {
             settings: Settings {
                 samples: 2,
                 sampling: Sampling::Radial,
@@ -293,23 +332,77 @@ impl<F: Objective> PlateauFreeGradient<F> {
                 catch_panics: false,
             },
             estimates: 0,
-            evaluator: evaluate_sequential::<F>,
             buffers: Buffers::default(),
         }
+    }
+}
+
+impl<F: Objective> PlateauFreeGradient<F> {
+    /// The estimator for `objective`: any `Fn(&[f64]) -> f64`, a [`crate::Seeded`] or
+    /// [`crate::Batch`] closure, or your own [`Objective`].
+    #[must_use]
+    pub fn new(objective: F) -> Self {
+        PlateauFreeGradient {
+            objective,
+            core: Core::default(),
+            evaluator: evaluate_sequential::<F>,
+        }
+    }
+}
+
+impl PlateauFreeGradient<NoObjective> {
+    /// The estimator's configuration alone, for a run whose points are evaluated elsewhere
+    /// ([`crate::Optimizer::ask_tell`]): it has the builder methods but no `estimate`.
+    ///
+    /// ```
+    /// use plateau::{Adam, Annealer, Optimizer, PlateauFreeGradient};
+    /// let grad = PlateauFreeGradient::without_objective().samples(4).seed(1);
+    /// let opt = Optimizer::new(Adam::new(0.1)?, Annealer::constant(0.3, 10)?);
+    /// let run = opt.ask_tell(grad, &[1.0, 2.0])?;
+    /// assert_eq!(run.iteration(), 0);
+    /// # Ok::<(), plateau::Error>(())
+    /// ```
+    #[must_use]
+    pub fn without_objective() -> Self {
+        PlateauFreeGradient {
+            objective: NoObjective,
+            core: Core::default(),
+            evaluator: evaluate_nothing,
+        }
+    }
+}
+
+/// The evaluator of [`NoObjective`]: never called (`estimate` needs an [`Objective`]), and
+/// harmless if it were.
+fn evaluate_nothing(
+    _: &NoObjective,
+    _: Points<'_>,
+    _: &[u64],
+    out: &mut [f64],
+    _: bool,
+) -> Result<(), Panic> {
+    out.fill(f64::NAN);
+    Ok(())
+}
+
+impl<F> PlateauFreeGradient<F> {
+    /// The configuration, the stream position and the scratch space, without the objective.
+    pub(crate) fn into_core(self) -> Core {
+        self.core
     }
 
     /// `N`, the number of evaluations of `f` per estimate (the paper's "number of
     /// samples"). With antithetic pairs it must be even: `N / 2` pairs.
     #[must_use]
     pub fn samples(mut self, samples: usize) -> Self {
-        self.settings.samples = samples;
+        self.core.settings.samples = samples;
         self
     }
 
     /// The sampler of perturbations.
     #[must_use]
     pub fn sampling(mut self, sampling: Sampling) -> Self {
-        self.settings.sampling = sampling;
+        self.core.settings.sampling = sampling;
         self
     }
 
@@ -317,7 +410,7 @@ impl<F: Objective> PlateauFreeGradient<F> {
     /// difference cancels the even part of `f`, including its constant offset.
     #[must_use]
     pub fn antithetic(mut self, antithetic: bool) -> Self {
-        self.settings.antithetic = antithetic;
+        self.core.settings.antithetic = antithetic;
         self
     }
 
@@ -327,7 +420,7 @@ impl<F: Objective> PlateauFreeGradient<F> {
     /// estimate (see `docs/estimators.md`). Default: off.
     #[must_use]
     pub fn orthogonal(mut self, orthogonal: bool) -> Self {
-        self.settings.orthogonal = orthogonal;
+        self.core.settings.orthogonal = orthogonal;
         self
     }
 
@@ -335,7 +428,7 @@ impl<F: Objective> PlateauFreeGradient<F> {
     /// the objective.
     #[must_use]
     pub fn seed(mut self, seed: u64) -> Self {
-        self.settings.seed = seed;
+        self.core.settings.seed = seed;
         self
     }
 
@@ -343,7 +436,7 @@ impl<F: Objective> PlateauFreeGradient<F> {
     /// [`OnFailure::Fail`]).
     #[must_use]
     pub fn on_failure(mut self, policy: OnFailure) -> Self {
-        self.settings.on_failure = policy;
+        self.core.settings.on_failure = policy;
         self
     }
 
@@ -364,7 +457,7 @@ impl<F: Objective> PlateauFreeGradient<F> {
     /// ```
     #[must_use]
     pub fn catch_panics(mut self, catch: bool) -> Self {
-        self.settings.catch_panics = catch;
+        self.core.settings.catch_panics = catch;
         self
     }
 
@@ -384,12 +477,12 @@ impl<F: Objective> PlateauFreeGradient<F> {
     /// ([`Error::OddSamples`]); orthogonal directions with the per-coordinate sampler
     /// ([`Error::OrthogonalUnsupported`]).
     pub fn validate(&self) -> Result<(), Error> {
-        self.settings.validate()
+        self.core.settings.validate()
     }
 
     /// Restarts the count of estimates: the next estimate repeats the first one's draws.
     pub fn reset(&mut self) {
-        self.estimates = 0;
+        self.core.estimates = 0;
     }
 
     /// The objective.
@@ -399,9 +492,11 @@ impl<F: Objective> PlateauFreeGradient<F> {
 
     /// The number of estimates made since construction or the last reset.
     pub fn estimates_made(&self) -> u64 {
-        self.estimates
+        self.core.estimates
     }
+}
 
+impl<F: Objective> PlateauFreeGradient<F> {
     /// Estimates the gradient of `f` smoothed by `N(0, sigma^2 I)` at `theta`.
     ///
     /// # Errors
@@ -438,74 +533,174 @@ impl<F: Objective> PlateauFreeGradient<F> {
         spreads: S,
         theta_checked: bool,
     ) -> Result<Estimate, Error> {
+        let mut pending = self.core.start(theta, theta_checked)?;
+        loop {
+            self.core.draw(theta, spreads, &mut pending)?;
+            let b = &mut self.core.buffers;
+            let evaluated = (self.evaluator)(
+                &self.objective,
+                Points::new(&b.points, theta.len()),
+                &b.seeds,
+                &mut b.values,
+                self.core.settings.catch_panics,
+            );
+            if let Err(payload) = evaluated {
+                return Err(Error::ObjectivePanicked {
+                    estimate: pending.index,
+                    message: panic_message(payload.as_ref()),
+                });
+            }
+            if let Some(estimate) = self.core.finish(spreads, &mut pending)? {
+                return Ok(estimate);
+            }
+        }
+    }
+}
+
+impl Core {
+    /// The configuration's rules ([`PlateauFreeGradient::validate`]).
+    pub(crate) fn validate(&self) -> Result<(), Error> {
+        self.settings.validate()
+    }
+
+    /// The index of the next estimate.
+    pub(crate) fn position(&self) -> u64 {
+        self.estimates
+    }
+
+    /// Moves the streams: the next estimate is estimate `position`.
+    pub(crate) fn set_position(&mut self, position: u64) {
+        self.estimates = position;
+    }
+
+    /// Starts an estimate at `theta`: checks what does not depend on the draws and sizes
+    /// the buffers. Nothing is counted yet.
+    pub(crate) fn start(&mut self, theta: &[f64], theta_checked: bool) -> Result<Pending, Error> {
         if theta.is_empty() {
             return Err(Error::EmptyTheta);
         }
         let settings = self.settings;
         settings.validate()?;
-        let n = theta.len();
-        let index = self.estimates;
-        let b = &mut self.buffers;
-        b.resize(settings.draws(), settings.samples, n);
-        let c_n = b.chi_mean(n);
-        let mut resampled = 0usize;
-        loop {
-            // Attempt 0 is the estimate as it always was; a redraw takes streams derived
-            // from the seed, the index and the attempt: deterministic, and the same on any
-            // thread.
-            let seed = if resampled == 0 {
-                settings.seed
-            } else {
-                stream_seed(settings.seed, index, RESAMPLE_STREAM ^ resampled as u64)
-            };
-            let stream = Stream { seed, index };
-            // The first draw lives in the memory of the gradient that will be returned: the
-            // estimate has to write that memory anyway, and one vector less is touched.
-            let first = stream.draw(&settings, c_n, n, b);
-            if let Err(point_error) = write_points(&settings, theta, spreads, &first, b) {
-                if !theta_checked && resampled == 0 {
-                    // Bad input is reported as such and does not consume an estimate.
-                    check::theta(theta)?;
-                }
-                self.estimates = index + 1;
-                return Err(point_error);
-            }
-            stream.objective_seeds(&settings, &mut b.seeds);
-            // Counted before `f` runs: an estimate whose `f` panics is still spent.
-            self.estimates = index + 1;
+        self.buffers
+            .resize(settings.draws(), settings.samples, theta.len());
+        Ok(Pending {
+            index: self.estimates,
+            resampled: 0,
+            first: Vec::new(),
+            theta_checked,
+            n: theta.len(),
+        })
+    }
 
-            let evaluated = (self.evaluator)(
-                &self.objective,
-                Points::new(&b.points, n),
-                &b.seeds,
-                &mut b.values,
-                settings.catch_panics,
-            );
-            if let Err(payload) = evaluated {
-                return Err(Error::ObjectivePanicked {
-                    estimate: index,
-                    message: panic_message(payload.as_ref()),
-                });
+    /// Draws the pending attempt's perturbations and writes its points and their seeds
+    /// ([`Core::points`], [`Core::seeds`]). The estimate counts as made from here: one whose
+    /// `f` fails or panics is still spent, so later estimates draw fresh perturbations.
+    fn draw<S: Spreads>(
+        &mut self,
+        theta: &[f64],
+        spreads: S,
+        pending: &mut Pending,
+    ) -> Result<(), Error> {
+        let settings = self.settings;
+        let n = theta.len();
+        let index = pending.index;
+        let b = &mut self.buffers;
+        let c_n = b.chi_mean(n);
+        // Attempt 0 is the estimate as it always was; a redraw takes streams derived from
+        // the seed, the index and the attempt: deterministic, and the same on any thread.
+        let seed = if pending.resampled == 0 {
+            settings.seed
+        } else {
+            stream_seed(
+                settings.seed,
+                index,
+                RESAMPLE_STREAM ^ pending.resampled as u64,
+            )
+        };
+        let stream = Stream { seed, index };
+        // The first draw lives in the memory of the gradient that will be returned: the
+        // estimate has to write that memory anyway, and one vector less is touched.
+        pending.first = stream.draw(&settings, c_n, n, b);
+        if let Err(point_error) = write_points(&settings, theta, spreads, &pending.first, b) {
+            if !pending.theta_checked && pending.resampled == 0 {
+                // Bad input is reported as such and does not consume an estimate.
+                check::theta(theta)?;
             }
-            match check::values(&b.values, &b.points, n) {
-                Ok(()) => {}
-                Err(e) => match settings.on_failure {
-                    OnFailure::Resample { limit } if resampled < limit => {
-                        resampled += 1;
-                        continue;
-                    }
-                    _ => return Err(e),
-                },
-            }
-            let gradient = accumulate(&settings, spreads, first, b)?;
-            let mean_value = mean(&b.values);
-            return Ok(Estimate {
-                gradient,
-                evaluations: settings.samples * (resampled + 1),
-                mean_value,
-                resampled,
-            });
+            self.estimates = index + 1;
+            return Err(point_error);
         }
+        stream.objective_seeds(&settings, &mut b.seeds);
+        // Counted before `f` runs: an estimate whose `f` panics is still spent.
+        self.estimates = index + 1;
+        Ok(())
+    }
+
+    /// [`Core::draw`] for one spread `sigma` (checked by the caller) in every coordinate.
+    pub(crate) fn draw_uniform(
+        &mut self,
+        theta: &[f64],
+        sigma: f64,
+        pending: &mut Pending,
+    ) -> Result<(), Error> {
+        self.draw(theta, Uniform(sigma), pending)
+    }
+
+    /// [`Core::finish`] for one spread `sigma` in every coordinate.
+    pub(crate) fn finish_uniform(
+        &mut self,
+        sigma: f64,
+        pending: &mut Pending,
+    ) -> Result<Option<Estimate>, Error> {
+        self.finish(Uniform(sigma), pending)
+    }
+
+    /// The points of the drawn attempt, rows of theta's dimension `n`.
+    pub(crate) fn points(&self, n: usize) -> Points<'_> {
+        Points::new(&self.buffers.points, n)
+    }
+
+    /// The objective's seed of every point of the drawn attempt.
+    pub(crate) fn seeds(&self) -> &[u64] {
+        &self.buffers.seeds
+    }
+
+    /// Where the values of the drawn attempt's points go, in the points' order.
+    pub(crate) fn values_mut(&mut self) -> &mut [f64] {
+        &mut self.buffers.values
+    }
+
+    /// Finishes the attempt from its values: the estimate, or `None` when a non-finite value
+    /// calls for a redraw ([`OnFailure::Resample`]; the next [`Core::draw`] makes it).
+    ///
+    /// # Errors
+    /// A non-finite value beyond the policy's redraws ([`Error::NonFiniteValue`]): then the
+    /// attempt is untouched and may be finished again with other values. An overflowing
+    /// gradient ([`Error::NonFiniteGradient`]): the attempt is used up.
+    fn finish<S: Spreads>(
+        &mut self,
+        spreads: S,
+        pending: &mut Pending,
+    ) -> Result<Option<Estimate>, Error> {
+        let settings = self.settings;
+        let b = &mut self.buffers;
+        let n = pending.n;
+        if let Err(e) = check::values(&b.values, &b.points, n) {
+            return match settings.on_failure {
+                OnFailure::Resample { limit } if pending.resampled < limit => {
+                    pending.resampled += 1;
+                    Ok(None)
+                }
+                _ => Err(e),
+            };
+        }
+        let gradient = accumulate(&settings, spreads, std::mem::take(&mut pending.first), b)?;
+        let mean_value = mean(&b.values);
+        Ok(Some(Estimate {
+            gradient,
+            evaluations: settings.samples * (pending.resampled + 1),
+            mean_value,
+            resampled: pending.resampled,
+        }))
     }
 }
 
@@ -529,7 +724,7 @@ impl<F: Objective + Sync> PlateauFreeGradient<F> {
     /// then called once per point; leave this off for batch objectives.
     #[must_use]
     pub fn parallel(mut self, parallel: bool) -> Self {
-        self.settings.parallel = parallel;
+        self.core.settings.parallel = parallel;
         self.evaluator = if parallel {
             evaluate_parallel::<F>
         } else {
@@ -545,10 +740,10 @@ impl<F: Objective> GradientEstimator for PlateauFreeGradient<F> {
     }
 
     fn stream_position(&self) -> Option<u64> {
-        Some(self.estimates)
+        Some(self.core.estimates)
     }
 
     fn set_stream_position(&mut self, position: u64) {
-        self.estimates = position;
+        self.core.estimates = position;
     }
 }

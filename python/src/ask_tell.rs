@@ -1,0 +1,280 @@
+//! Ask and tell from Python: `_AskTell`, which `plateau.ask_tell(x0, ...)`
+//! (`python/plateau/__init__.py`) wraps. Nothing here calls Python: the caller evaluates the
+//! asked points wherever it likes and tells their values back.
+
+use super::*;
+use plateau::{AskTell as RsAskTell, PaperAskTell};
+
+/// The run behind `plateau.AskTell`: `plateau::Minimizer`'s adaptive search, or the paper's
+/// loop as `plateau.minimize(method='plateau')` runs it (its final evaluation included).
+///
+/// `ask()` gives `(X, seeds)`: `X` a float64 array of shape `(k, *x0.shape)`, `seeds` a uint64
+/// array of length `k` (the seeds a seeded `fun` would receive), or None once the run has
+/// ended. `tell(values)` takes `k` floats in the order of `X`. Asking twice, telling without
+/// asking and telling the wrong number of values are ValueErrors, as are non-finite values
+/// (which change nothing: tell again).
+#[pyclass(module = "plateau._plateau", name = "_AskTell")]
+pub(crate) struct PyAskTell {
+    run: Run,
+    shape: Vec<usize>,
+}
+
+enum Run {
+    Adaptive(Box<RsAskTell>),
+    Paper(Box<Paper>),
+}
+
+/// The paper's loop, its per-iteration records and its final evaluation.
+struct Paper {
+    run: PaperAskTell,
+    seed: u64,
+    record_x: bool,
+    final_evaluation: bool,
+    record: Record,
+    /// Whether the final evaluation is asked and awaits its value.
+    final_asked: bool,
+    final_value: Option<f64>,
+}
+
+impl Paper {
+    fn ask(&mut self) -> PyResult<Option<(Vec<f64>, Vec<u64>)>> {
+        if self.final_asked {
+            return Err(value_error(Error::AskPending));
+        }
+        let asked = self
+            .run
+            .ask()
+            .map_err(value_error)?
+            .map(|a| (a.points().as_flat().to_vec(), a.seeds().to_vec()));
+        if asked.is_some() || !self.final_evaluation || self.final_value.is_some() {
+            return Ok(asked);
+        }
+        // As `plateau.minimize`: `fun` once more at the last iterate, with the run's seed.
+        self.final_asked = true;
+        Ok(Some((self.run.theta().to_vec(), vec![self.seed])))
+    }
+
+    fn tell(&mut self, values: &[f64]) -> PyResult<()> {
+        if self.final_asked {
+            if values.len() != 1 {
+                return Err(value_error(Error::TellCount {
+                    expected: 1,
+                    got: values.len(),
+                }));
+            }
+            // `plateau.minimize` takes the final value as it comes: so does this.
+            self.final_value = Some(values[0]);
+            self.final_asked = false;
+            return Ok(());
+        }
+        let before = self.run.iteration();
+        self.run.tell(values).map_err(value_error)?;
+        if self.run.iteration() == before {
+            return Ok(()); // a redraw: the iteration is not done
+        }
+        let history = self.run.history();
+        let record = &mut self.record;
+        if let (Some(&sigma), Some(estimate)) = (history.sigma.last(), self.run.last_estimate()) {
+            let g = &estimate.gradient;
+            record.sigma.push(sigma);
+            record
+                .grad_norm
+                .push(g.iter().map(|v| v * v).sum::<f64>().sqrt());
+            record.value.push(estimate.mean_value);
+            record.nfev.push(history.evaluations as u64);
+        }
+        if self.record_x {
+            record.x.extend_from_slice(self.run.theta());
+        }
+        Ok(())
+    }
+
+    fn is_done(&self) -> bool {
+        self.run.is_done()
+            && !self.final_asked
+            && (!self.final_evaluation || self.final_value.is_some())
+    }
+}
+
+#[pymethods]
+impl PyAskTell {
+    /// The adaptive search (`plateau.minimize`'s default method) from `x0`.
+    #[staticmethod]
+    #[pyo3(signature = (x0, budget=None, seed=0, sigma0=None, bounds=None, target=None, population=None, restarts=true))]
+    #[allow(clippy::too_many_arguments)]
+    fn adaptive(
+        py: Python<'_>,
+        x0: &Bound<'_, PyAny>,
+        budget: Option<usize>,
+        seed: u64,
+        sigma0: Option<f64>,
+        bounds: Option<Bounds>,
+        target: Option<f64>,
+        population: Option<usize>,
+        restarts: bool,
+    ) -> PyResult<Self> {
+        let (theta, shape) = to_vector(py, x0, "x0")?;
+        let mut minimizer = RsMinimizer::without_objective()
+            .seed(seed)
+            .restarts(restarts);
+        if let Some(b) = budget {
+            minimizer = minimizer.budget(b);
+        }
+        if let Some(s) = sigma0 {
+            minimizer = minimizer.sigma0(s);
+        }
+        if let Some((lower, upper)) = bounds {
+            minimizer = minimizer.bounds(lower, upper);
+        }
+        if let Some(t) = target {
+            minimizer = minimizer.target(t);
+        }
+        if let Some(p) = population {
+            minimizer = minimizer.population(p);
+        }
+        let run = minimizer.ask_tell(&theta).map_err(value_error)?;
+        Ok(PyAskTell {
+            run: Run::Adaptive(Box::new(run)),
+            shape,
+        })
+    }
+
+    /// The paper's loop (`plateau.minimize(method='plateau')`) from `x0`.
+    #[staticmethod]
+    #[pyo3(signature = (x0, adam, annealer, iterations, samples=2, sampling="radial", antithetic=true, orthogonal=false, seed=0, record_x=false, final_evaluation=true))]
+    #[allow(clippy::too_many_arguments)]
+    fn paper(
+        py: Python<'_>,
+        x0: &Bound<'_, PyAny>,
+        adam: PyRef<'_, PyAdam>,
+        annealer: PyRef<'_, PyAnnealer>,
+        iterations: usize,
+        samples: usize,
+        sampling: &str,
+        antithetic: bool,
+        orthogonal: bool,
+        seed: u64,
+        record_x: bool,
+        final_evaluation: bool,
+    ) -> PyResult<Self> {
+        let (theta, shape) = to_vector(py, x0, "x0")?;
+        let grad = RsPlateauFreeGradient::without_objective()
+            .samples(samples)
+            .sampling(parse_sampling(sampling)?)
+            .antithetic(antithetic)
+            .orthogonal(orthogonal)
+            .seed(seed);
+        let optimizer = Optimizer::new(adam.inner.clone(), annealer.inner)
+            .record_theta(false)
+            .iterations(iterations);
+        let run = optimizer.ask_tell(grad, &theta).map_err(value_error)?;
+        Ok(PyAskTell {
+            run: Run::Paper(Box::new(Paper {
+                run,
+                seed,
+                record_x,
+                final_evaluation,
+                record: Record::default(),
+                final_asked: false,
+                final_value: None,
+            })),
+            shape,
+        })
+    }
+
+    /// `(X, seeds)`: the next points, shape `(k, *x0.shape)`, and their uint64 seeds; None
+    /// once the run has ended.
+    #[allow(clippy::type_complexity)]
+    fn ask<'py>(
+        &mut self,
+        py: Python<'py>,
+    ) -> PyResult<Option<(Bound<'py, PyAny>, Bound<'py, PyArray1<u64>>)>> {
+        let asked = match &mut self.run {
+            Run::Adaptive(run) => run
+                .ask()
+                .map_err(value_error)?
+                .map(|a| (a.points().as_flat().to_vec(), a.seeds().to_vec())),
+            Run::Paper(p) => p.ask()?,
+        };
+        let Some((points, seeds)) = asked else {
+            return Ok(None);
+        };
+        let mut shape = vec![seeds.len()];
+        shape.extend(&self.shape);
+        let points = points.into_pyarray(py).reshape(shape)?.into_any();
+        Ok(Some((points, seeds.into_pyarray(py))))
+    }
+
+    /// Tells the values of the asked points, in their order.
+    fn tell(&mut self, values: Vec<f64>) -> PyResult<()> {
+        match &mut self.run {
+            Run::Adaptive(run) => run.tell(&values).map_err(value_error),
+            Run::Paper(p) => p.tell(&values),
+        }
+    }
+
+    /// Whether the run has ended.
+    #[getter]
+    fn done(&self) -> bool {
+        match &self.run {
+            Run::Adaptive(run) => run.is_done(),
+            Run::Paper(p) => p.is_done(),
+        }
+    }
+
+    /// Evaluations told so far.
+    #[getter]
+    fn nfev(&self) -> usize {
+        match &self.run {
+            Run::Adaptive(run) => run.evaluations(),
+            Run::Paper(p) => p.run.history().evaluations + usize::from(p.final_value.is_some()),
+        }
+    }
+
+    /// `(x, fun)`: the best point told so far and its value (the adaptive search), or None.
+    fn best<'py>(&self, py: Python<'py>) -> PyResult<Option<(Bound<'py, PyAny>, f64)>> {
+        match &self.run {
+            Run::Adaptive(run) => match run.best() {
+                Some((x, fun)) => Ok(Some((array_like(py, x.to_vec(), &self.shape)?, fun))),
+                None => Ok(None),
+            },
+            Run::Paper(_) => Ok(None),
+        }
+    }
+
+    /// The raw results of the ended run (the dict that `_minimize_adaptive` or `_minimize`
+    /// returns, plus the paper loop's final value), or None before the end.
+    fn result<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let out = PyDict::new(py);
+        match &self.run {
+            Run::Adaptive(run) => {
+                let Some(best) = run.result() else {
+                    return Ok(None);
+                };
+                minimum_dict(py, &out, best.clone(), &self.shape)?;
+            }
+            Run::Paper(p) => {
+                if !p.is_done() {
+                    return Ok(None);
+                }
+                let nit = p.run.iteration();
+                let r = &p.record;
+                out.set_item("x", array_like(py, p.run.theta().to_vec(), &self.shape)?)?;
+                out.set_item("nit", nit)?;
+                out.set_item("nfev", p.run.history().evaluations)?;
+                out.set_item("final_value", p.final_value)?;
+                out.set_item("stopped_by_callback", false)?;
+                out.set_item("sigma", r.sigma.clone().into_pyarray(py))?;
+                out.set_item("grad_norm", r.grad_norm.clone().into_pyarray(py))?;
+                out.set_item("fun", r.value.clone().into_pyarray(py))?;
+                out.set_item("nfev_history", r.nfev.clone().into_pyarray(py))?;
+                if p.record_x {
+                    let mut full = vec![nit];
+                    full.extend(&self.shape);
+                    out.set_item("x_history", r.x.clone().into_pyarray(py).reshape(full)?)?;
+                }
+            }
+        }
+        Ok(Some(out))
+    }
+}

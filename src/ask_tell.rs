@@ -1,0 +1,866 @@
+//! Ask and tell: the optimiser hands out an iteration's points and takes their values back,
+//! and the caller evaluates the points wherever it likes (its own queue, a game engine, a
+//! render farm).
+//!
+//! Two runs, one per loop:
+//! - [`AskTell`], from [`Minimizer::ask_tell`]: both strategies of [`crate::minimize`]
+//!   (the adaptive search and [`Strategy::Paper`]); it ends with the same [`Minimum`].
+//! - [`PaperAskTell`], from [`Optimizer::ask_tell`]: the paper's loop with a configured
+//!   [`PlateauFreeGradient`]; it ends with the same [`History`] and [`OptimizerState`].
+//!
+//! Each [`AskTell::ask`] gives the points (rows of `n`) and one seed per point: the seeds the
+//! [`crate::Seeded`] and [`crate::Batch`] forms of the objective receive. Each
+//! [`AskTell::tell`] takes one value per point, in the points' order, and finishes the
+//! iteration. The callback forms ([`Minimizer::run`], [`Optimizer::minimize`]) are written
+//! on the same steps, so that with the same options and seed both give the same bits.
+//!
+//! A failed `tell` changes nothing: the points still wait for their values (for the one
+//! exception, see [`PaperAskTell::tell`]).
+
+use std::fmt;
+
+use nalgebra::DVector;
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+use crate::adam::Adam;
+use crate::adaptive::{rng, Params, SearchGaussian};
+use crate::anneal::Annealer;
+use crate::check;
+use crate::error::Error;
+use crate::estimator::{Core, Estimate, Pending, PlateauFreeGradient};
+use crate::minimize::{Metric, Minimum, Options, Stop, Strategy, FULL_METRIC_MAX_DIM};
+use crate::objective::Points;
+// For the documentation's links only.
+use crate::optimize::{History, Optimizer, OptimizerState, Progress, RunError};
+#[cfg(doc)]
+use crate::Minimizer;
+
+/// The objective of a run whose points are evaluated elsewhere:
+/// [`Minimizer::without_objective`] and [`PlateauFreeGradient::without_objective`] hold
+/// it. It is no [`crate::Objective`], so that nothing can evaluate it by mistake.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct NoObjective;
+
+/// The points of one ask, and the seed of every point.
+#[derive(Debug, Clone, Copy)]
+pub struct Ask<'a> {
+    points: Points<'a>,
+    seeds: &'a [u64],
+}
+
+impl<'a> Ask<'a> {
+    /// The points, rows of the problem's dimension.
+    pub fn points(&self) -> Points<'a> {
+        self.points
+    }
+
+    /// The seed of every point, for an objective with randomness of its own (common random
+    /// numbers): the seeds a [`crate::Seeded`] or [`crate::Batch`] objective would receive.
+    pub fn seeds(&self) -> &'a [u64] {
+        self.seeds
+    }
+
+    /// The number of points (values to tell).
+    pub fn len(&self) -> usize {
+        self.seeds.len()
+    }
+
+    /// Whether there are no points (never the case for an ask that a run hands out).
+    pub fn is_empty(&self) -> bool {
+        self.seeds.is_empty()
+    }
+
+    /// The dimension of every point.
+    pub fn dim(&self) -> usize {
+        self.points.dim()
+    }
+
+    /// The points with their seeds, in order.
+    pub fn iter(&self) -> impl ExactSizeIterator<Item = (&'a [f64], u64)> + 'a {
+        self.points.iter().zip(self.seeds.iter().copied())
+    }
+}
+
+/// The best point seen and its value.
+#[derive(Debug, Clone)]
+struct Best {
+    x: Vec<f64>,
+    fun: f64,
+}
+
+impl Best {
+    /// Takes every point better than the best so far, in order (the first of equals wins).
+    fn see(&mut self, points: Points<'_>, values: &[f64]) {
+        for (point, &v) in points.iter().zip(values) {
+            if v < self.fun {
+                self.fun = v;
+                self.x.copy_from_slice(point);
+            }
+        }
+    }
+}
+
+/// The first non-finite value, as the error that names it: `first` is the index of the
+/// first value in the run's count of evaluations.
+fn non_finite(values: &[f64], points: Points<'_>, first: usize) -> Result<(), Error> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(k) => Err(Error::NonFiniteValue {
+            sample: first + k,
+            value: values[k],
+            point: points.get(k).to_vec(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The count of told values against the count of asked points.
+fn count(expected: usize, got: usize) -> Result<(), Error> {
+    if expected == got {
+        Ok(())
+    } else {
+        Err(Error::TellCount { expected, got })
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The paper's loop.
+
+/// The paper's loop ([`Optimizer`] with a [`PlateauFreeGradient`]), asked and told: each
+/// iteration asks for the `N` points of one gradient estimate and takes the Adam step when
+/// their values are told. Made by [`Optimizer::ask_tell`] or, from a saved state,
+/// [`Optimizer::ask_tell_from`].
+///
+/// ```
+/// use plateau::{Adam, Annealer, Optimizer, PlateauFreeGradient};
+///
+/// let f = |x: &[f64]| if x[0] + 2.0 * x[1] > 0.3 { 1.0 } else { 0.0 };
+/// let new_opt = || Optimizer::new(Adam::new(0.02).unwrap(), Annealer::paper(0.5, 200).unwrap());
+///
+/// let grad = PlateauFreeGradient::without_objective().samples(8).seed(7);
+/// let mut run = new_opt().ask_tell(grad, &[1.0, 1.0])?;
+/// while let Some(ask) = run.ask()? {
+///     let values: Vec<f64> = ask.points().iter().map(f).collect(); // anywhere, any order
+///     run.tell(&values)?;
+/// }
+/// let told = run.finish();
+///
+/// // The callback form: the same run, bit for bit.
+/// let mut grad = PlateauFreeGradient::new(f).samples(8).seed(7);
+/// let called = new_opt().minimize(&mut grad, &[1.0, 1.0])?;
+/// assert_eq!(told, called);
+/// # Ok::<(), plateau::Error>(())
+/// ```
+#[derive(Debug)]
+pub struct PaperAskTell {
+    optimizer: Optimizer,
+    core: Core,
+    progress: Progress,
+    /// The iteration in progress: its spread and its estimate (drawn, or to be redrawn).
+    current: Option<(f64, Pending)>,
+    /// Whether the current iteration's points wait for their values.
+    asked: bool,
+    /// The estimate of the last completed iteration.
+    last: Option<Estimate>,
+}
+
+impl Optimizer {
+    /// An ask-and-tell run of this loop from `start`, with `estimator`'s configuration and
+    /// stream position (its objective, if it has one, is not used: make it with
+    /// [`PlateauFreeGradient::without_objective`]). Adam's moments start afresh, as in
+    /// [`Optimizer::minimize`]. See [`PaperAskTell`].
+    ///
+    /// # Errors
+    /// An empty or non-finite `start`; an estimator configuration that
+    /// [`PlateauFreeGradient::validate`] rejects.
+    pub fn ask_tell<F>(
+        self,
+        estimator: PlateauFreeGradient<F>,
+        start: &[f64],
+    ) -> Result<PaperAskTell, Error> {
+        let state = OptimizerState::new(start)?;
+        self.ask_tell_from(estimator, state).map_err(Error::from)
+    }
+
+    /// [`Optimizer::ask_tell`] from a saved state (see [`OptimizerState`] and
+    /// [`PaperAskTell::state`]): the continued run is bit for bit the uninterrupted one.
+    ///
+    /// # Errors
+    /// A state that [`OptimizerState::validate`] rejects, or an estimator configuration
+    /// that [`PlateauFreeGradient::validate`] rejects; the state comes back unused.
+    pub fn ask_tell_from<F>(
+        mut self,
+        estimator: PlateauFreeGradient<F>,
+        state: OptimizerState,
+    ) -> Result<PaperAskTell, RunError> {
+        let mut core = estimator.into_core();
+        if let Err(error) = core.validate() {
+            return Err(RunError {
+                error,
+                state: Box::new(state),
+            });
+        }
+        let (progress, position) = self.resume(state)?;
+        if let Some(position) = position {
+            core.set_position(position);
+        }
+        Ok(PaperAskTell {
+            optimizer: self,
+            core,
+            progress,
+            current: None,
+            asked: false,
+            last: None,
+        })
+    }
+}
+
+impl PaperAskTell {
+    /// The points of the next gradient estimate (`N` rows of theta's dimension) and their
+    /// seeds (both members of an antithetic pair share one), or `None` once every iteration
+    /// is done. After a [`PaperAskTell::tell`] whose values called for a redraw
+    /// ([`crate::OnFailure::Resample`]), the same iteration's redrawn points.
+    ///
+    /// # Errors
+    /// [`Error::AskPending`] if the last asked points still wait for their values; a
+    /// perturbed point that overflows ([`Error::NonFinitePoint`]: then the run stays at the
+    /// last completed iteration, and asks again draw the same points).
+    pub fn ask(&mut self) -> Result<Option<Ask<'_>>, Error> {
+        if self.asked {
+            return Err(Error::AskPending);
+        }
+        let (sigma, mut pending) = match self.current.take() {
+            Some(current) => current,
+            None => {
+                let Some(sigma) = self.optimizer.next_sigma(&self.progress) else {
+                    return Ok(None);
+                };
+                check::sigma(sigma)?;
+                (sigma, self.core.start(&self.progress.theta, false)?)
+            }
+        };
+        let index = pending.index;
+        if let Err(error) = self
+            .core
+            .draw_uniform(&self.progress.theta, sigma, &mut pending)
+        {
+            // As a failed iteration of the callback form: its streams are drawn again.
+            self.core.set_position(index);
+            return Err(error);
+        }
+        self.current = Some((sigma, pending));
+        self.asked = true;
+        Ok(Some(Ask {
+            points: self.core.points(self.progress.theta.len()),
+            seeds: self.core.seeds(),
+        }))
+    }
+
+    /// Tells the values of the asked points, in their order: finishes the estimate and
+    /// takes the Adam step (or, when a value is not finite and the estimator redraws,
+    /// [`crate::OnFailure::Resample`], readies the redraw for the next ask).
+    ///
+    /// # Errors
+    /// [`Error::NothingAsked`] without an ask waiting for values; [`Error::TellCount`] for
+    /// the wrong number of values; [`Error::NonFiniteValue`] for a NaN or an infinity
+    /// (beyond the estimator's redraws). After these the run is unchanged and the same
+    /// points still wait for their values. An estimate or a step that overflows
+    /// ([`Error::NonFiniteGradient`], [`Error::StepOverflow`]) leaves the run at the last
+    /// completed iteration, as the callback form's [`RunError`] does: the next ask draws the
+    /// same points again.
+    pub fn tell(&mut self, values: &[f64]) -> Result<(), Error> {
+        let (true, Some((sigma, pending))) = (self.asked, &mut self.current) else {
+            return Err(Error::NothingAsked);
+        };
+        let sigma = *sigma;
+        let index = pending.index;
+        count(self.core.values_mut().len(), values.len())?;
+        self.core.values_mut().copy_from_slice(values);
+        let estimate = match self.core.finish_uniform(sigma, pending) {
+            Ok(Some(estimate)) => estimate,
+            Ok(None) => {
+                self.asked = false; // the redraw waits for the next ask
+                return Ok(());
+            }
+            Err(error) => {
+                if !pending.is_drawn() {
+                    // The draws are spent: the iteration starts over.
+                    self.current = None;
+                    self.asked = false;
+                    self.core.set_position(index);
+                }
+                return Err(error);
+            }
+        };
+        self.current = None;
+        self.asked = false;
+        if let Err(error) = self.optimizer.advance(&mut self.progress, sigma, &estimate) {
+            self.core.set_position(index);
+            return Err(error);
+        }
+        self.last = Some(estimate);
+        Ok(())
+    }
+
+    /// Whether every iteration is done (the next ask gives `None`).
+    pub fn is_done(&self) -> bool {
+        self.optimizer.next_sigma(&self.progress).is_none()
+    }
+
+    /// Iterations completed.
+    pub fn iteration(&self) -> usize {
+        self.progress.iteration
+    }
+
+    /// The current parameters (after the last completed iteration's step).
+    pub fn theta(&self) -> &[f64] {
+        &self.progress.theta
+    }
+
+    /// The spread of the iteration in progress or the next one; `None` once done.
+    pub fn sigma(&self) -> Option<f64> {
+        match &self.current {
+            Some((sigma, _)) => Some(*sigma),
+            None => self.optimizer.next_sigma(&self.progress),
+        }
+    }
+
+    /// The record of the completed iterations.
+    pub fn history(&self) -> &History {
+        &self.progress.history
+    }
+
+    /// The gradient estimate of the last completed iteration (what the callback form's
+    /// observer sees in [`crate::Step::estimate`]).
+    pub fn last_estimate(&self) -> Option<&Estimate> {
+        self.last.as_ref()
+    }
+
+    /// The optimiser (Adam with its moments so far, the annealer).
+    pub fn optimizer(&self) -> &Optimizer {
+        &self.optimizer
+    }
+
+    /// The state after the last completed iteration, to save and continue from
+    /// ([`Optimizer::ask_tell_from`] or [`Optimizer::minimize_from`]); an iteration in
+    /// progress is repeated by the continued run.
+    pub fn state(&self) -> OptimizerState {
+        let position = match &self.current {
+            Some((_, pending)) => pending.index,
+            None => self.core.position(),
+        };
+        self.optimizer
+            .state_of(self.progress.clone(), Some(position))
+    }
+
+    /// Ends the run where it stands: the [`History`] that [`Optimizer::minimize`] returns
+    /// (its last theta the point the run ended at; `stopped_early` if iterations remained).
+    pub fn finish(self) -> History {
+        let stopped_early = !self.is_done();
+        let Progress {
+            theta, mut history, ..
+        } = self.progress;
+        history.stopped_early = stopped_early;
+        if history.theta.is_empty() {
+            history.theta.push(theta);
+        }
+        history
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// `minimize`.
+
+/// A [`Minimizer`] run, asked and told: each ask gives one iteration's points (a
+/// generation of the adaptive search, a gradient estimate of [`Strategy::Paper`] and, last,
+/// its final point), each tell takes their values. It ends with the [`Minimum`] that
+/// [`Minimizer::run`] returns, which is this loop with the objective evaluating every ask.
+///
+/// ```
+/// use plateau::Minimizer;
+///
+/// let f = |x: &[f64]| x.iter().map(|v| (v.round() - 1.0).powi(2)).sum::<f64>();
+/// let mut run = Minimizer::without_objective().budget(600).seed(3).ask_tell(&[0.0; 3])?;
+/// while let Some(ask) = run.ask()? {
+///     // The points could go to a queue, a game engine, a render farm; the seeds with them.
+///     let values: Vec<f64> = ask.iter().map(|(x, _seed)| f(x)).collect();
+///     run.tell(&values)?;
+/// }
+/// let told = run.finish()?;
+/// assert_eq!(told, Minimizer::new(f).budget(600).seed(3).run(&[0.0; 3])?);
+/// assert_eq!(told.fun, 0.0);
+/// # Ok::<(), plateau::Error>(())
+/// ```
+pub struct AskTell {
+    options: Options,
+    budget: usize,
+    n: usize,
+    best: Best,
+    evaluations: usize,
+    engine: Engine,
+    result: Option<Minimum>,
+    /// An error that ends the run (a point that overflowed): every later ask repeats it.
+    failed: Option<Error>,
+}
+
+impl fmt::Debug for AskTell {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("AskTell")
+            .field("strategy", &self.options.strategy)
+            .field("budget", &self.budget)
+            .field("evaluations", &self.evaluations)
+            .field("best", &self.best.fun)
+            .field("result", &self.result)
+            .finish_non_exhaustive()
+    }
+}
+
+enum Engine {
+    Adaptive(Box<Adaptive>),
+    Paper(Box<Paper>),
+}
+
+/// The adaptive search between asks: `Minimizer`'s loop over runs and generations, unrolled.
+struct Adaptive {
+    rng: Xoshiro256PlusPlus,
+    sigma0: f64,
+    scales: Vec<f64>,
+    full: bool,
+    lambda: usize,
+    start: Vec<f64>,
+    iterations: usize,
+    restarts: usize,
+    /// The run in progress; `None` when the next ask starts one.
+    dist: Option<SearchGaussian>,
+    /// The asked generation's offsets (repaired onto the bounds), while its values are
+    /// awaited.
+    asked: Option<Vec<DVector<f64>>>,
+    points: Vec<f64>,
+    seeds: Vec<u64>,
+}
+
+/// [`Strategy::Paper`] between asks: the loop, then one evaluation at its last iterate.
+struct Paper {
+    /// `None` when the budget allows no iteration.
+    run: Option<PaperAskTell>,
+    iterations: usize,
+    /// The spread of the last iteration.
+    sigma: f64,
+    /// The final evaluation's point (the start, until the loop has run) and seed.
+    last_point: Vec<f64>,
+    last_seed: [u64; 1],
+    final_asked: bool,
+}
+
+impl AskTell {
+    pub(crate) fn new(options: Options, x0: &[f64]) -> Result<AskTell, Error> {
+        let budget = options.check(x0)?;
+        let n = x0.len();
+        let engine = match options.strategy {
+            Strategy::Adaptive => Engine::Adaptive(Box::new(Adaptive::new(&options, x0))),
+            Strategy::Paper {
+                samples,
+                lr,
+                sigma0,
+            } => Engine::Paper(Box::new(Paper::new(
+                &options, x0, budget, samples, lr, sigma0,
+            )?)),
+        };
+        Ok(AskTell {
+            budget,
+            n,
+            best: Best {
+                x: x0.to_vec(),
+                fun: f64::INFINITY,
+            },
+            evaluations: 0,
+            engine,
+            result: None,
+            failed: None,
+            options,
+        })
+    }
+
+    /// The next points to evaluate and their seeds, or `None` once the run has ended (budget
+    /// spent, target reached, converged without restarts).
+    ///
+    /// The adaptive search asks for one generation (its population, cut to the budget
+    /// left), all points of a generation with one seed (common random numbers), a new seed
+    /// each generation. [`Strategy::Paper`] asks for each estimate's `N` points (a seed per
+    /// antithetic pair), and last for the final parameters alone.
+    ///
+    /// # Errors
+    /// [`Error::AskPending`] if the last asked points still wait for their values; a point
+    /// that overflows ([`Error::NonFinitePoint`], which ends an adaptive run: later asks
+    /// repeat it).
+    pub fn ask(&mut self) -> Result<Option<Ask<'_>>, Error> {
+        if let Some(error) = &self.failed {
+            return Err(error.clone());
+        }
+        if self.result.is_some() {
+            return Ok(None);
+        }
+        let n = self.n;
+        match &mut self.engine {
+            Engine::Adaptive(a) => {
+                if let Err(error) = a.ask(&self.options, self.budget, self.evaluations, n) {
+                    if !matches!(error, Error::AskPending) {
+                        self.failed = Some(error.clone());
+                    }
+                    return Err(error);
+                }
+                Ok(Some(Ask {
+                    points: Points::new(&a.points, n),
+                    seeds: &a.seeds,
+                }))
+            }
+            Engine::Paper(p) => {
+                if let Some(run) = &mut p.run {
+                    if !run.is_done() {
+                        return run.ask();
+                    }
+                    if !p.final_asked {
+                        p.last_point.copy_from_slice(run.theta());
+                    }
+                }
+                if p.final_asked {
+                    return Err(Error::AskPending);
+                }
+                p.final_asked = true;
+                Ok(Some(Ask {
+                    points: Points::new(&p.last_point, n),
+                    seeds: &p.last_seed,
+                }))
+            }
+        }
+    }
+
+    /// Tells the values of the asked points, in their order, and takes the iteration's step.
+    ///
+    /// # Errors
+    /// [`Error::NothingAsked`] without an ask waiting for values; [`Error::TellCount`] for
+    /// the wrong number of values; [`Error::NonFiniteValue`] for a NaN or an infinity (as
+    /// the callback form reports it: the adaptive search counts `sample` over the run, the
+    /// paper's loop within the estimate). After these the run is unchanged and the same
+    /// points still wait for their values. The paper's loop may also report an overflowing
+    /// gradient or step ([`PaperAskTell::tell`]).
+    pub fn tell(&mut self, values: &[f64]) -> Result<(), Error> {
+        if self.result.is_some() {
+            return Err(Error::NothingAsked);
+        }
+        let n = self.n;
+        let result = match &mut self.engine {
+            Engine::Adaptive(a) => a.tell(
+                &self.options,
+                self.budget,
+                &mut self.evaluations,
+                &mut self.best,
+                values,
+                n,
+            )?,
+            Engine::Paper(p) => p.tell(
+                &self.options,
+                &mut self.evaluations,
+                &mut self.best,
+                values,
+                n,
+            )?,
+        };
+        self.result = result;
+        Ok(())
+    }
+
+    /// Whether the run has ended (the next ask gives `None`; [`AskTell::result`] is set).
+    pub fn is_done(&self) -> bool {
+        self.result.is_some()
+    }
+
+    /// The result, once the run has ended.
+    pub fn result(&self) -> Option<&Minimum> {
+        self.result.as_ref()
+    }
+
+    /// The result: what [`Minimizer::run`] returns.
+    ///
+    /// # Errors
+    /// [`Error::Unfinished`] before the run has ended (ask and tell until ask gives `None`);
+    /// the error that ended a failed run.
+    pub fn finish(self) -> Result<Minimum, Error> {
+        if let Some(error) = self.failed {
+            return Err(error);
+        }
+        self.result.ok_or(Error::Unfinished {
+            evaluations: self.evaluations,
+            budget: self.budget,
+        })
+    }
+
+    /// The best point told so far and its value; `None` before the first value.
+    pub fn best(&self) -> Option<(&[f64], f64)> {
+        (self.best.fun < f64::INFINITY).then_some((self.best.x.as_slice(), self.best.fun))
+    }
+
+    /// Evaluations told so far.
+    pub fn evaluations(&self) -> usize {
+        self.evaluations
+    }
+
+    /// The budget of evaluations.
+    pub fn budget(&self) -> usize {
+        self.budget
+    }
+
+    /// The dimension of the points.
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// The minimum of the run with the best point seen.
+    fn minimum(
+        best: &Best,
+        evaluations: usize,
+        iterations: usize,
+        restarts: usize,
+        sigma: f64,
+        stop: Stop,
+    ) -> Minimum {
+        Minimum {
+            x: best.x.clone(),
+            fun: best.fun,
+            evaluations,
+            iterations,
+            restarts,
+            sigma,
+            stop,
+        }
+    }
+}
+
+impl Adaptive {
+    fn new(o: &Options, x0: &[f64]) -> Adaptive {
+        let n = x0.len();
+        // The start spread and the covariance's starting scales: from the box, else from x0.
+        let (sigma0, scales) = match (&o.bounds, o.sigma0) {
+            (Some((lo, hi)), s) => {
+                let widths: Vec<f64> = lo.iter().zip(hi).map(|(l, u)| u - l).collect();
+                let mean = widths.iter().sum::<f64>() / n as f64;
+                if mean > 0.0 {
+                    let scales = widths.iter().map(|w| (w / mean).max(1e-12)).collect();
+                    (s.unwrap_or(0.25 * mean), scales)
+                } else {
+                    (s.unwrap_or(1.0), vec![1.0; n])
+                }
+            }
+            (None, Some(s)) => (s, vec![1.0; n]),
+            (None, None) => {
+                let big = x0.iter().fold(1.0f64, |a, v| a.max(v.abs()));
+                (0.5 * big, vec![1.0; n])
+            }
+        };
+        let full = match o.metric {
+            Metric::Full => true,
+            Metric::Diagonal => false,
+            Metric::Auto => n <= FULL_METRIC_MAX_DIM,
+        };
+        Adaptive {
+            rng: rng(o.seed),
+            sigma0,
+            scales,
+            full,
+            lambda: o.population.unwrap_or_else(|| Params::default_lambda(n)),
+            start: x0.to_vec(),
+            iterations: 0,
+            restarts: 0,
+            dist: None,
+            asked: None,
+            points: Vec::new(),
+            seeds: Vec::new(),
+        }
+    }
+
+    /// Draws the next generation into `points` and `seeds`.
+    fn ask(
+        &mut self,
+        o: &Options,
+        budget: usize,
+        evaluations: usize,
+        n: usize,
+    ) -> Result<(), Error> {
+        if self.asked.is_some() {
+            return Err(Error::AskPending);
+        }
+        let dist = self.dist.get_or_insert_with(|| {
+            let mut dist = SearchGaussian::new(
+                &self.start,
+                self.sigma0,
+                &self.scales,
+                self.lambda,
+                self.full,
+            );
+            dist.mirrored = o.mirrored;
+            dist.flat_growth = o.flat_growth;
+            dist
+        });
+        let mut ys = dist.sample(&mut self.rng).ys;
+        let count = ys.len().min(budget - evaluations);
+        ys.truncate(count);
+        self.points.clear();
+        for y in ys.iter_mut() {
+            let mut x = dist.point(y);
+            if let Some((lo, hi)) = &o.bounds {
+                let mut moved = false;
+                for i in 0..n {
+                    let c = x[i].clamp(lo[i], hi[i]);
+                    moved |= c != x[i];
+                    x[i] = c;
+                }
+                if moved {
+                    // The offset of the point actually evaluated, for the update.
+                    *y = (&x - &dist.mean) / dist.sigma;
+                }
+            }
+            self.points.extend(x.iter());
+        }
+        if let Some(index) = self.points.iter().position(|v| !v.is_finite()) {
+            return Err(Error::NonFinitePoint {
+                sample: evaluations + index / n,
+                index: index % n,
+                value: self.points[index],
+            });
+        }
+        let seed = o.seed ^ (self.iterations as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        self.seeds.clear();
+        self.seeds.resize(count, seed);
+        self.asked = Some(ys);
+        Ok(())
+    }
+
+    /// Takes the asked generation's values: the best point, the budget, the target, the
+    /// distribution's update and, when a run ends, the restart. Returns the result once the
+    /// whole run has ended.
+    fn tell(
+        &mut self,
+        o: &Options,
+        budget: usize,
+        evaluations: &mut usize,
+        best: &mut Best,
+        values: &[f64],
+        n: usize,
+    ) -> Result<Option<Minimum>, Error> {
+        let (Some(ys), Some(dist)) = (&self.asked, &mut self.dist) else {
+            return Err(Error::NothingAsked);
+        };
+        let points = Points::new(&self.points, n);
+        count(ys.len(), values.len())?;
+        non_finite(values, points, *evaluations)?;
+        best.see(points, values);
+        let count = values.len();
+        *evaluations += count;
+        self.iterations += 1;
+        let end = |stop, sigma| {
+            Some(AskTell::minimum(
+                best,
+                *evaluations,
+                self.iterations,
+                self.restarts,
+                sigma,
+                stop,
+            ))
+        };
+        if o.target.is_some_and(|t| best.fun <= t) {
+            return Ok(end(Stop::Target, dist.sigma));
+        }
+        if *evaluations >= budget || count < dist.p.lambda {
+            return Ok(end(Stop::Budget, dist.sigma));
+        }
+        let ended = dist.update(ys, values).is_some();
+        let sigma = dist.sigma;
+        self.asked = None;
+        if ended {
+            if !o.restarts {
+                let result = end(Stop::Converged, sigma);
+                return Ok(result);
+            }
+            self.restarts += 1;
+            self.lambda *= 2;
+            if o.restart_from_best {
+                self.start.clone_from(&best.x);
+            }
+            self.dist = None;
+        }
+        Ok(None)
+    }
+}
+
+impl Paper {
+    fn new(
+        o: &Options,
+        x0: &[f64],
+        budget: usize,
+        samples: usize,
+        lr: f64,
+        sigma0: f64,
+    ) -> Result<Paper, Error> {
+        let iterations = (budget - 1) / samples;
+        let mut adam = Adam::new(lr)?;
+        if let Some((lo, hi)) = &o.bounds {
+            adam = adam.bounds(lo.clone(), hi.clone())?;
+        }
+        let (run, sigma) = if iterations > 0 {
+            let annealer = Annealer::paper(sigma0, iterations)?;
+            let sigma = annealer.sigma(iterations - 1);
+            let grad = PlateauFreeGradient::without_objective()
+                .samples(samples)
+                .seed(o.seed);
+            let opt = Optimizer::new(adam, annealer).record_theta(false);
+            (Some(opt.ask_tell(grad, x0)?), sigma)
+        } else {
+            (None, sigma0)
+        };
+        Ok(Paper {
+            run,
+            iterations,
+            sigma,
+            last_point: x0.to_vec(),
+            last_seed: [o.seed],
+            final_asked: false,
+        })
+    }
+
+    fn tell(
+        &mut self,
+        o: &Options,
+        evaluations: &mut usize,
+        best: &mut Best,
+        values: &[f64],
+        n: usize,
+    ) -> Result<Option<Minimum>, Error> {
+        if self.final_asked {
+            let points = Points::new(&self.last_point, n);
+            count(1, values.len())?;
+            non_finite(values, points, *evaluations)?;
+            best.see(points, values);
+            *evaluations += 1;
+            let stop = if o.target.is_some_and(|t| best.fun <= t) {
+                Stop::Target
+            } else {
+                Stop::Budget
+            };
+            return Ok(Some(AskTell::minimum(
+                best,
+                *evaluations,
+                self.iterations,
+                0,
+                self.sigma,
+                stop,
+            )));
+        }
+        let Some(run) = &mut self.run else {
+            return Err(Error::NothingAsked);
+        };
+        run.tell(values)?;
+        // The told points are still in the estimator's buffers.
+        best.see(run.core.points(n), values);
+        *evaluations += values.len();
+        Ok(None)
+    }
+}
