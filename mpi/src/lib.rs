@@ -59,10 +59,11 @@ use std::any::Any;
 use std::fmt;
 use std::ops::Range;
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::time::{Duration, Instant};
 
 use mpi::datatype::Equivalence;
-use mpi::point_to_point::{Destination, MatchedReceiveVec, Source};
-use mpi::topology::{Communicator, Rank};
+use mpi::point_to_point::{Destination, MatchedReceiveVec, Message, Source, Status};
+use mpi::topology::{Communicator, Process, Rank};
 use mpi::Tag;
 use plateau::{Objective, Points};
 
@@ -79,6 +80,53 @@ const TAG_PANICKED: Tag = 5;
 
 /// The rank that runs the optimiser and hands out the points.
 pub const ROOT: Rank = 0;
+
+/// How a rank waits for its next message: rank 0 for the workers' values, a worker for its
+/// next chunk.
+///
+/// MPI's blocking receive polls in a loop and keeps a core busy while it waits, which costs
+/// nothing when every rank has a core of its own, and slows the job down when ranks share
+/// cores (rank 0 beside the workers of its node, more ranks than cores): the waiting rank
+/// takes the core a renderer's thread could use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Wait {
+    /// Poll, then sleep: spin for the first 100 microseconds, then sleep a twentieth of the
+    /// time waited so far (at most a millisecond) between polls. A reply arrives at most
+    /// about 5% (or 1 ms) later than with [`Wait::Spin`]; a waiting rank uses almost no CPU.
+    #[default]
+    Backoff,
+    /// MPI's blocking probe: the lowest latency, one core busy while waiting. For ranks with
+    /// a core each.
+    Spin,
+}
+
+/// The spinning phase of [`Wait::Backoff`].
+const SPIN: Duration = Duration::from_micros(100);
+/// The longest sleep of [`Wait::Backoff`].
+const MAX_SLEEP: Duration = Duration::from_millis(1);
+
+impl Wait {
+    /// The next message from `process`, with any tag.
+    fn probe(self, process: &Process<'_>) -> (Message, Status) {
+        match self {
+            Wait::Spin => process.matched_probe(),
+            Wait::Backoff => {
+                let started = Instant::now();
+                loop {
+                    if let Some(found) = process.immediate_matched_probe() {
+                        return found;
+                    }
+                    let waited = started.elapsed();
+                    if waited < SPIN {
+                        std::hint::spin_loop();
+                    } else {
+                        std::thread::sleep((waited / 20).min(MAX_SLEEP));
+                    }
+                }
+            }
+        }
+    }
+}
 
 /// Everything that can go wrong in setting up or serving, short of a process dying.
 #[derive(Debug, thiserror::Error, Clone, PartialEq, Eq)]
@@ -150,12 +198,14 @@ pub fn chunk(len: usize, workers: usize, worker: usize) -> Range<usize> {
 pub struct MpiBatch<'c, C: Communicator> {
     comm: &'c C,
     workers: usize,
+    wait: Wait,
 }
 
 impl<C: Communicator> fmt::Debug for MpiBatch<'_, C> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("MpiBatch")
             .field("workers", &self.workers)
+            .field("wait", &self.wait)
             .finish()
     }
 }
@@ -177,7 +227,14 @@ impl<'c, C: Communicator> MpiBatch<'c, C> {
         Ok(MpiBatch {
             comm,
             workers: (size - 1) as usize,
+            wait: Wait::default(),
         })
+    }
+
+    /// How rank 0 waits for the workers' values ([`Wait::Backoff`] unless set).
+    pub fn wait(mut self, wait: Wait) -> Self {
+        self.wait = wait;
+        self
     }
 
     /// The number of worker ranks (the communicator's size less one).
@@ -228,7 +285,7 @@ impl<'c, C: Communicator> MpiBatch<'c, C> {
                 continue;
             }
             let rank = k as Rank + 1;
-            let (message, status) = self.comm.process_at_rank(rank).matched_probe();
+            let (message, status) = self.wait.probe(&self.comm.process_at_rank(rank));
             if status.tag() == TAG_PANICKED {
                 let (text, _) = (message, status).matched_receive_vec::<u8>();
                 panicked.get_or_insert((rank, range, String::from_utf8_lossy(&text).into_owned()));
@@ -307,6 +364,7 @@ pub struct Served {
 
 /// Evaluates, on a worker rank, the chunks rank 0's [`MpiBatch`] sends, with `objective`'s
 /// [`Objective::evaluate_batch`], until rank 0 finishes its `MpiBatch`; returns what it did.
+/// Waits for each chunk with [`Wait::Backoff`] ([`serve_with`] chooses).
 ///
 /// A panic of `objective` is caught, reported to rank 0 (whose `MpiBatch` panics with it) and
 /// counted; the worker goes on serving. See the [crate documentation](crate) for an example.
@@ -319,6 +377,18 @@ where
     C: Communicator,
     O: Objective + ?Sized,
 {
+    serve_with(comm, objective, Wait::default())
+}
+
+/// [`serve`], waiting for each chunk as `wait` says.
+///
+/// # Errors
+/// As [`serve`].
+pub fn serve_with<C, O>(comm: &C, objective: &O, wait: Wait) -> Result<Served, Error>
+where
+    C: Communicator,
+    O: Objective + ?Sized,
+{
     let rank = comm.rank();
     if rank == ROOT {
         return Err(Error::ServeOnRoot);
@@ -327,7 +397,7 @@ where
     let mut served = Served::default();
     let (mut points, mut values) = (Vec::new(), Vec::new());
     loop {
-        let (message, status) = root.matched_probe();
+        let (message, status) = wait.probe(&root);
         let tag = status.tag();
         let (header, _) = (message, status).matched_receive_vec::<u64>();
         let protocol = |what: String| Error::Protocol { rank, tag, what };

@@ -138,6 +138,14 @@ fn paper_loop_over_two_workers_is_the_sequential_run() {
 }
 
 #[test]
+fn spinning_ranks_give_the_same_run() {
+    assert_same_as_sequential(
+        3,
+        &["paper", "--spin", "--samples", "8", "--iterations", "30"],
+    );
+}
+
+#[test]
 fn paper_loop_over_one_worker_is_the_sequential_run() {
     assert_same_as_sequential(2, &["paper", "--samples", "6", "--iterations", "40"]);
 }
@@ -209,6 +217,52 @@ fn a_caught_panic_is_the_estimators_error() {
     assert_eq!(
         out.stdout.trim(),
         "error f panicked during estimate 0: the objective panicked on rank 1 (points 0..4 of 8): deliberate panic in the objective"
+    );
+}
+
+/// The example `shadow`, which `cargo test` builds beside the test binaries: the test runs
+/// from `target/<profile>/deps/`, the examples are in `target/<profile>/examples/`.
+fn shadow_example() -> PathBuf {
+    let test = std::env::current_exe().expect("the test's path");
+    let profile = test
+        .parent()
+        .and_then(Path::parent)
+        .expect("the test runs from target/<profile>/deps");
+    let exe = profile.join("examples").join("shadow");
+    assert!(
+        exe.is_file(),
+        "{} is missing: run the tests with cargo test, which builds the examples",
+        exe.display()
+    );
+    exe
+}
+
+#[test]
+fn shadow_over_mpi_is_the_path_tracers_sequential_run() {
+    let mut command = Command::new(mpirun());
+    command
+        .args(["-n", "3", "--oversubscribe"])
+        .arg(shadow_example())
+        .args([
+            "--iterations",
+            "8",
+            "--scale",
+            "0.2",
+            "--samples",
+            "4",
+            "--check",
+        ]);
+    let out = run(command);
+    assert!(
+        out.success,
+        "the SHADOW run failed:\n{}\n{}",
+        out.stdout, out.stderr
+    );
+    assert!(
+        out.stdout.contains("identical to the sequential run: yes")
+            && out.stdout.contains("param MSE"),
+        "{}",
+        out.stdout
     );
 }
 

@@ -3,13 +3,14 @@
 //! (`tests/mpirun.rs` does).
 //!
 //! ```text
-//! plateau-mpi-demo MODE [--sequential] [--dim N] [--samples N] [--iterations N]
+//! plateau-mpi-demo MODE [--sequential] [--spin] [--dim N] [--samples N] [--iterations N]
 //!   MODE  paper         the paper's loop (plateau-free gradient, Adam, annealing)
 //!         minimize      plateau::Minimizer (the adaptive search)
 //!         values        one batch whose values are NaN, infinities, -0.0, subnormal
 //!         panic         an objective that panics: rank 0 panics with the worker's message
 //!         panic-caught  the same under catch_panics: rank 0 reports the error and ends well
 //!   --sequential  evaluate in this process, without MPI (the reference)
+//!   --spin        wait for messages with MPI's blocking probe (plateau_mpi::Wait::Spin)
 //! ```
 //!
 //! Under `mpirun`, rank 0 prints `theta`, `values` and `evaluations` lines (hex bit
@@ -22,11 +23,13 @@ use plateau::seeding::mix;
 use plateau::{
     Adam, Annealer, Minimizer, Objective, Optimizer, PlateauFreeGradient, Points, Seeded,
 };
+use plateau_mpi::Wait;
 
 /// The command line.
 struct Args {
     mode: String,
     sequential: bool,
+    wait: Wait,
     dim: usize,
     samples: usize,
     iterations: usize,
@@ -35,11 +38,12 @@ struct Args {
 fn parse() -> Result<Args, String> {
     let mut args = std::env::args().skip(1);
     let mode = args.next().ok_or(
-        "usage: plateau-mpi-demo MODE [--sequential] [--dim N] [--samples N] [--iterations N]",
+        "usage: plateau-mpi-demo MODE [--sequential] [--spin] [--dim N] [--samples N] [--iterations N]",
     )?;
     let mut parsed = Args {
         mode,
         sequential: false,
+        wait: Wait::Backoff,
         dim: 6,
         samples: 8,
         iterations: 60,
@@ -47,6 +51,10 @@ fn parse() -> Result<Args, String> {
     while let Some(flag) = args.next() {
         if flag == "--sequential" {
             parsed.sequential = true;
+            continue;
+        }
+        if flag == "--spin" {
+            parsed.wait = Wait::Spin;
             continue;
         }
         let value = args.next().ok_or(format!("{flag} needs a value"))?;
@@ -177,12 +185,13 @@ fn main() -> ExitCode {
             plateau_mpi::MpiBatch::new(&world)
                 .map_err(|e| e.to_string())
                 .and_then(|remote| {
+                    let remote = remote.wait(args.wait);
                     let result = run(&args, &remote).map_err(|e| e.to_string());
                     remote.finish();
                     result
                 })
         } else {
-            plateau_mpi::serve(&world, &f)
+            plateau_mpi::serve_with(&world, &f, args.wait)
                 .map(|served| eprintln!("rank {}: {served:?}", world.rank()))
                 .map_err(|e| e.to_string())
         }
