@@ -371,7 +371,8 @@ pub struct Served {
 ///
 /// # Errors
 /// [`Error::ServeOnRoot`] on rank 0; [`Error::Protocol`] if a message from rank 0 does not
-/// follow the protocol (the worker stops serving then).
+/// follow the protocol (the worker stops serving then, and rank 0 would wait for its reply:
+/// end the job, e.g. with `world.abort(1)`).
 pub fn serve<C, O>(comm: &C, objective: &O) -> Result<Served, Error>
 where
     C: Communicator,
