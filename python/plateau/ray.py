@@ -96,9 +96,11 @@ class RayEvaluator:
     num_workers
         The number of actors (K).
     address
-        A running cluster's address (``"auto"``, ``"ray://head:10001"``, ``"head:6379"``); with
-        ``None`` a local Ray instance is started. Ignored when Ray is already initialised in
-        this process (the evaluator then uses that connection and never shuts it down).
+        A running cluster's address (``"head:6379"``, ``"auto"``, ``"ray://head:10001"``) or
+        ``"local"`` (always a new local instance). ``None`` does what ``ray.init()`` does: the
+        cluster named by ``RAY_ADDRESS``, else the latest one started by ``ray start`` on this
+        machine, else a new local instance. Ignored when Ray is already initialised in this
+        process (the evaluator then uses that connection and never shuts it down).
     num_cpus_per_worker, num_gpus_per_worker, resources
         The resources each actor reserves (Ray's ``num_cpus``, ``num_gpus``, ``resources``).
     chunk_size

@@ -9,6 +9,13 @@ from __future__ import annotations
 
 import functools
 import os
+import secrets
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
 import threading
 import time
 
@@ -72,7 +79,8 @@ def local_cluster():
     here = os.path.dirname(os.path.abspath(__file__))
     os.environ["RAY_USAGE_STATS_ENABLED"] = "0"
     os.environ["PYTHONPATH"] = os.pathsep.join(p for p in [here, saved["PYTHONPATH"]] if p)
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
+    # address="local": a new instance even if `ray start` left an address in /tmp/ray.
+    ray.init(address="local", num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
     yield
     ray.shutdown()
     for key, value in saved.items():
@@ -233,3 +241,74 @@ def test_a_chunk_lost_too_often_is_a_clear_error(local_cluster):
     assert evaluator.closed
     with pytest.raises(ValueError, match="closed"):
         evaluator(np.zeros((1, 2)))
+
+
+ADDRESS_DRIVER = """
+import sys
+import numpy as np
+import plateau
+from plateau.ray import RayEvaluator
+
+def make_fun():
+    def fun(x, seed):
+        return float(np.sum((x - 0.25) ** 2)) + (seed % 7) * 1e-3 + float(x[0] > 0.1)
+    return fun
+
+with RayEvaluator(make_fun, num_workers=2, address=sys.argv[1], start_timeout=120) as evaluator:
+    g = plateau.PlateauFreeGradient(evaluator, samples=8, batched=True, seeded=True, seed=3).estimate([0.2, -0.1, 0.4], 0.3)
+    ray_workers = evaluator.nfev
+expected = plateau.PlateauFreeGradient(make_fun(), samples=8, seeded=True, seed=3).estimate([0.2, -0.1, 0.4], 0.3)
+print("equal" if np.array_equal(g, expected) and ray_workers == 8 else f"different: {g!r} {expected!r} {ray_workers}")
+"""
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_joins_an_existing_cluster_by_its_address(tmp_path):
+    """A cluster started by `ray start --head` (token authentication on, with a token made
+    here), joined from another process by RayEvaluator(address=...)."""
+    token = tmp_path / "token"
+    token.write_text(secrets.token_hex(32))
+    env = dict(os.environ, RAY_AUTH_MODE="token", RAY_AUTH_TOKEN_PATH=str(token), RAY_USAGE_STATS_ENABLED="0")
+    port = free_port()
+    # Its own temp dir (short: Ray's Unix sockets live there), so that the address file of
+    # `ray start` does not stay behind in /tmp/ray.
+    temp_dir = tempfile.mkdtemp(prefix="plateau-ray-")
+    ray_cli = os.path.join(os.path.dirname(sys.executable), "ray")
+    head = subprocess.Popen(
+        [ray_cli, "start", "--head", "--block", f"--port={port}",
+         "--num-cpus=2", "--include-dashboard=false", "--disable-usage-stats", f"--temp-dir={temp_dir}"],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, start_new_session=True,
+    )  # fmt: skip
+    try:
+        log = []
+
+        def wait_until_up():
+            for line in head.stdout:
+                log.append(line.decode(errors="replace"))
+                if "block forever" in log[-1]:
+                    return
+
+        reader = threading.Thread(target=wait_until_up, daemon=True)
+        reader.start()
+        reader.join(timeout=180)
+        assert log and "block forever" in log[-1], "ray start --head did not come up:\n" + "".join(log)
+        driver = subprocess.run(
+            [sys.executable, "-c", ADDRESS_DRIVER, f"127.0.0.1:{port}"],
+            capture_output=True, text=True, env=env, timeout=300,
+        )  # fmt: skip
+        assert driver.returncode == 0, driver.stderr[-3000:]
+        assert driver.stdout.strip().splitlines()[-1] == "equal", driver.stdout
+    finally:
+        # Only the head started here: SIGTERM drains and stops its processes.
+        head.send_signal(signal.SIGTERM)
+        try:
+            head.wait(timeout=90)
+        except subprocess.TimeoutExpired:
+            os.killpg(head.pid, signal.SIGKILL)
+            head.wait()
+        shutil.rmtree(temp_dir, ignore_errors=True)
