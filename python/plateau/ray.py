@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import collections
 import math
+import operator
 import os
 import threading
 import time
@@ -71,6 +72,25 @@ def _lost_worker_errors(ray: Any) -> Tuple[type, ...]:
     names = ["RayActorError", "WorkerCrashedError", "NodeDiedError", "ObjectLostError", "LocalRayletDiedError"]
     found = tuple(getattr(ray.exceptions, n) for n in names if hasattr(ray.exceptions, n))
     return found
+
+
+def _seed_array(seeds: Any, count: int) -> np.ndarray:
+    """``seeds`` as ``count`` uint64 values, or a ValueError (never a silent wrap-around)."""
+    # Python ints stay exact (numpy would turn [1, 2**64 - 1] into floats).
+    raw = seeds if isinstance(seeds, np.ndarray) else np.array(seeds, dtype=object)
+    if raw.shape != (count,) or not (np.issubdtype(raw.dtype, np.integer) or raw.dtype == object):
+        raise ValueError(
+            f"seeds must be {count} integers (one per row of X), got shape {raw.shape} and dtype {raw.dtype}"
+        )
+    if raw.dtype == np.uint64:
+        return raw
+    try:
+        values = [operator.index(s) for s in raw.tolist()]
+    except TypeError as e:
+        raise ValueError(f"seeds must be integers, got {raw!r}") from e
+    if any(v < 0 or v >= 2**64 for v in values):
+        raise ValueError(f"seeds must be integers in [0, 2**64), got {raw!r}")
+    return np.array(values, dtype=np.uint64)
 
 
 def _positive_int(name: str, value: Any, minimum: int = 1) -> int:
@@ -256,15 +276,7 @@ class RayEvaluator:
                 f"X must have shape (N, ...) with one non-empty point per row and N >= 1, got shape {points.shape}"
             )
         count = points.shape[0]
-        seed_array: Optional[np.ndarray] = None
-        if seeds is not None:
-            raw = np.asarray(seeds)
-            if raw.shape != (count,) or not (np.issubdtype(raw.dtype, np.integer) or raw.dtype == object):
-                raise ValueError(f"seeds must be {count} integers (one per row of X), got shape {raw.shape} and dtype {raw.dtype}")
-            try:
-                seed_array = raw.astype(np.uint64, casting="unsafe") if raw.dtype != object else np.array([int(s) for s in raw], dtype=np.uint64)
-            except (OverflowError, ValueError, TypeError) as e:
-                raise ValueError(f"seeds must be integers in [0, 2**64), got {raw!r}") from e
+        seed_array = None if seeds is None else _seed_array(seeds, count)
         with self._lock:
             return self._run(points, seed_array)
 
@@ -320,7 +332,10 @@ class RayEvaluator:
                     try:
                         ray.get(ref)
                     except Exception as e:
-                        raise WorkerLostError(f"a replacement actor for worker {slot} failed to start (make_fun raised or the actor died): {e}") from e
+                        raise WorkerLostError(
+                            f"a replacement actor for worker {slot} failed to start "
+                            f"(make_fun raised or the actor died): {e}"
+                        ) from e
                     starting_slots.discard(slot)
                     continue
                 chunk, slot, actor = running.pop(ref)

@@ -207,6 +207,8 @@ def test_bad_arguments_are_value_errors(fast_pool):
         fast_pool(np.zeros((2, 3)), np.zeros(3, dtype=np.uint64))
     with pytest.raises(ValueError, match="seeds must be 2 integers"):
         fast_pool(np.zeros((2, 3)), np.zeros(2))
+    with pytest.raises(ValueError, match=r"in \[0, 2\*\*64\)"):
+        fast_pool(np.zeros((2, 3)), np.array([1, -1]))
 
 
 def test_an_exception_in_fun_comes_out_with_its_type(fast_pool):
