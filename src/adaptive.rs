@@ -24,6 +24,9 @@
 //! - **restarts from the best point seen** with a doubled population (IPOP: Auger and Hansen,
 //!   CEC 2005) when a run has converged or stalls; a larger population is a smoother, more
 //!   global estimate of the smoothed function's gradient, which multimodal functions need.
+//! - **resolution**: a flat generation at a spread below `1e-6` of the mean (`max(1, |m|)`)
+//!   is the objective's resolution (single-precision geometry in a renderer), not a plateau:
+//!   the run ends and restarts instead of growing `sigma` into a random walk on rounding noise.
 //!
 //! Implemented here from the published formulas; no code is taken from any other project.
 
@@ -111,6 +114,8 @@ impl Params {
 pub(crate) enum RunEnd {
     /// The spread became negligible next to the mean (converged to the working precision).
     TolX,
+    /// A flat generation at a spread below `1e-6` of the mean: the objective's resolution.
+    Resolution,
     /// The values of the last generations are all within `1e-12` of each other.
     TolFun,
     /// The covariance's condition number passed `1e14`.
@@ -381,6 +386,15 @@ impl SearchGaussian {
             })
         {
             return Some(RunEnd::TolX);
+        }
+        // A flat generation whose spread is below a millionth of the mean is not a plateau to
+        // cross but the objective's resolution (a renderer computing in single precision
+        // cannot tell such points apart): growing the spread there makes it random-walk on
+        // rounding noise (seen on CUP: 150 generations at 1e-8 to 1e-6). The run has
+        // converged; a restart, which keeps the best point, is worth more.
+        let m_scale = self.mean.iter().fold(1.0f64, |a, m| a.max(m.abs()));
+        if flat && self.sigma * diag_max < 1e-6 * m_scale {
+            return Some(RunEnd::Resolution);
         }
         if (max_d / min_d).powi(2) > 1e14 {
             return Some(RunEnd::Condition);
