@@ -220,6 +220,10 @@ struct Args {
     factor: usize,
     out: String,
     quick: bool,
+    /// Only these methods run; the other methods' rows are read back from the CSV in `out`
+    /// (written by an earlier full run), so that a change to one method does not cost the
+    /// others' minutes (CMA-ES IPOP alone takes most of the 21).
+    rerun: Option<Vec<Method>>,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -231,6 +235,7 @@ fn parse_args() -> Result<Args, String> {
         factor: 1000,
         out: "docs/results".into(),
         quick: false,
+        rerun: None,
     };
     let mut it = std::env::args().skip(1);
     let mut out_set = false;
@@ -258,6 +263,14 @@ fn parse_args() -> Result<Args, String> {
                     .map(|s| Kind::parse(s).ok_or(format!("unknown function {s}")))
                     .collect::<Result<_, _>>()?
             }
+            "--rerun" => {
+                a.rerun = Some(
+                    value()?
+                        .split(',')
+                        .map(|s| Method::parse(s).ok_or(format!("unknown method {s}")))
+                        .collect::<Result<_, _>>()?,
+                )
+            }
             "--out" => {
                 a.out = value()?;
                 out_set = true
@@ -266,7 +279,7 @@ fn parse_args() -> Result<Args, String> {
                 return Err(
                     "usage: compare [--quick] [--dims 2,5,10,20,100] [--seeds 5] \
                      [--factor 1000] [--methods minimize,cmaes,cmaes-ipop,random,paper-loop] \
-                     [--functions sphere,...] [--out docs/results]"
+                     [--functions sphere,...] [--out docs/results] [--rerun minimize]"
                         .into(),
                 )
             }
@@ -291,12 +304,24 @@ fn main() {
             std::process::exit(2);
         }
     };
-    let mut runs = Vec::new();
+    let mut runs = match &args.rerun {
+        Some(rerun) => match kept_runs(&args, rerun) {
+            Ok(kept) => kept,
+            Err(e) => {
+                eprintln!("--rerun: {e}");
+                std::process::exit(2);
+            }
+        },
+        None => Vec::new(),
+    };
     for &n in &args.dims {
         for &kind in &args.kinds {
             for seed in 0..args.seeds {
                 let problem = Problem::new(kind, n, seed);
                 for &method in &args.methods {
+                    if args.rerun.as_ref().is_some_and(|r| !r.contains(&method)) {
+                        continue;
+                    }
                     let budget = args.factor * n;
                     let rec = Recorder::new(&problem, budget);
                     let t = Instant::now();
@@ -326,10 +351,75 @@ fn main() {
             }
         }
     }
+    // The page's tables group by method, function and n, not by the order of the rows; the CSV
+    // keeps the order of a full run.
+    let order = |r: &Run| {
+        (
+            args.dims.iter().position(|&d| d == r.n),
+            args.kinds.iter().position(|&k| k == r.kind),
+            r.seed,
+            args.methods.iter().position(|&m| m == r.method),
+        )
+    };
+    runs.sort_by_key(order);
     if let Err(e) = write_outputs(&args, &runs) {
         eprintln!("writing {}: {e}", args.out);
         std::process::exit(1);
     }
+}
+
+/// The rows of the methods that `--rerun` leaves out, read from `<out>/compare.csv`: every
+/// (method, function, n, seed) of this run's grid must be there.
+fn kept_runs(args: &Args, rerun: &[Method]) -> Result<Vec<Run>, String> {
+    let path = format!("{}/compare.csv", args.out);
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{path}: {e}"))?;
+    let mut kept = Vec::new();
+    for (i, line) in text.lines().enumerate().skip(1) {
+        let bad = |what: &str| format!("{path}:{}: {what}", i + 1);
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != 9 + TARGETS.len() {
+            return Err(bad("wrong number of columns"));
+        }
+        let method = Method::parse(f[0]).ok_or_else(|| bad("unknown method"))?;
+        let kind = Kind::parse(f[1]).ok_or_else(|| bad("unknown function"))?;
+        let n: usize = f[3].parse().map_err(|_| bad("n"))?;
+        let seed: u64 = f[4].parse().map_err(|_| bad("seed"))?;
+        if rerun.contains(&method)
+            || !args.methods.contains(&method)
+            || !args.kinds.contains(&kind)
+            || !args.dims.contains(&n)
+            || seed >= args.seeds
+        {
+            continue;
+        }
+        let mut hits = [None; 11];
+        for (h, v) in hits.iter_mut().zip(&f[9..]) {
+            if !v.is_empty() {
+                *h = Some(v.parse().map_err(|_| bad("evals_to"))?);
+            }
+        }
+        kept.push(Run {
+            method,
+            kind,
+            n,
+            seed,
+            evals: f[5].parse().map_err(|_| bad("evaluations"))?,
+            best: f[6].parse().map_err(|_| bad("best"))?,
+            hits,
+            seconds: f[8].parse().map_err(|_| bad("seconds"))?,
+        });
+    }
+    let expected = args.dims.len()
+        * args.kinds.len()
+        * args.seeds as usize
+        * args.methods.iter().filter(|m| !rerun.contains(m)).count();
+    if kept.len() != expected {
+        return Err(format!(
+            "{path} holds {} of the {expected} rows the other methods need",
+            kept.len()
+        ));
+    }
+    Ok(kept)
 }
 
 fn fraction<'a>(runs: impl Iterator<Item = &'a Run>) -> (f64, usize) {
@@ -395,6 +485,20 @@ fn write_outputs(args: &Args, runs: &[Run]) -> std::io::Result<()> {
         cmd.join(" ")
     )
     .unwrap();
+    if let Some(rerun) = &args.rerun {
+        writeln!(
+            md,
+            "That command ran {} only; the other methods' rows are those of the previous full \
+             run (`cargo run --release --example compare`), read back from `{csv_name}`, \
+             whose code they do not depend on.\n",
+            rerun
+                .iter()
+                .map(|m| m.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+        .unwrap();
+    }
     writeln!(
         md,
         "Functions: {} (shifted to a random optimum in [-4, 4]^n and rotated; definitions in \
