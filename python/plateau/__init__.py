@@ -25,12 +25,24 @@ The main entry points:
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 import inspect
 import math
-from typing import Any, Callable, Optional
+from typing import (
+    Any,
+    Callable,
+    Literal,
+    Optional,
+    Sequence,
+    SupportsFloat,
+    Tuple,
+    Union,
+    cast,
+)
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _plateau
 from ._plateau import (
@@ -61,6 +73,15 @@ __all__ = [
 
 __version__ = "0.1.0"
 
+_FloatArray = npt.NDArray[np.float64]
+_SamplingName = Union[Literal["radial", "per_coordinate", "gaussian"], "Sampling", str]
+_ScheduleName = Literal["paper", "constant", "exponential", "cosine"]
+_Bounds = Union[
+    Sequence[Tuple[Optional[SupportsFloat], Optional[SupportsFloat]]],
+    Tuple[Optional[SupportsFloat], Optional[SupportsFloat]],
+    Any,
+]
+
 
 class Sampling(str, enum.Enum):
     """The sampler of perturbations (the Rust ``plateau::Sampling``).
@@ -84,7 +105,7 @@ class Sampling(str, enum.Enum):
         return self.value
 
 
-class OptimizeResult(dict):
+class OptimizeResult(dict[str, Any]):
     """The result of :func:`minimize`, with the fields of ``scipy.optimize.OptimizeResult``.
 
     Attributes
@@ -115,14 +136,25 @@ class OptimizeResult(dict):
         The paper's loop: per-iteration records. Adaptive: None.
     """
 
+    x: _FloatArray
+    fun: float
+    nit: int
+    nfev: int
+    success: bool
+    status: int
+    message: str
+    history: Optional[History]
+    restarts: Optional[int]
+    sigma: Optional[float]
+
     def __getattr__(self, name: str) -> Any:
         try:
             return self[name]
         except KeyError as e:
             raise AttributeError(name) from e
 
-    __setattr__ = dict.__setitem__  # type: ignore[assignment]
-    __delattr__ = dict.__delitem__  # type: ignore[assignment]
+    __setattr__ = dict.__setitem__
+    __delattr__ = dict.__delitem__
 
     def __repr__(self) -> str:
         if not self:
@@ -163,11 +195,11 @@ class History:
 
     def __init__(
         self,
-        sigma: np.ndarray,
-        grad_norm: np.ndarray,
-        fun: np.ndarray,
-        nfev: np.ndarray,
-        x: Optional[np.ndarray] = None,
+        sigma: _FloatArray,
+        grad_norm: _FloatArray,
+        fun: _FloatArray,
+        nfev: npt.NDArray[np.uint64],
+        x: Optional[_FloatArray] = None,
     ) -> None:
         self.sigma = sigma
         self.grad_norm = grad_norm
@@ -210,6 +242,158 @@ def _parse_bounds(bounds: Any, shape: tuple[int, ...]) -> tuple[list[float], lis
     return [float(v) for v in lower], [float(v) for v in upper]
 
 
+def _adaptive_bounds(
+    bounds: Any, shape: tuple[int, ...]
+) -> Optional[tuple[list[float], list[float]]]:
+    """``method='adaptive'``'s box: :func:`_parse_bounds`, finite only."""
+    if bounds is None:
+        return None
+    box = _parse_bounds(bounds, shape)
+    for i, (lo, hi) in enumerate(zip(*box)):
+        if not (math.isfinite(lo) and math.isfinite(hi)):
+            raise ValueError(
+                f"bounds[{i}] = ({lo}, {hi}): method='adaptive' needs finite bounds "
+                "(the box sets the starting spread and where restarts go)"
+            )
+    return box
+
+
+def _choose_method(
+    method: Optional[str],
+    budget: Optional[int],
+    sigma0: Optional[float],
+    paper_only: dict[str, Any],
+) -> str:
+    """The method of a :func:`minimize` or :func:`ask_tell` call, lower case, after the checks
+    that do not depend on it: ``budget`` a whole number, no option of the paper's loop (the
+    entries of ``paper_only`` that are not None) with ``method='adaptive'``."""
+    if budget is not None and (isinstance(budget, bool) or int(budget) != budget or budget < 1):
+        raise ValueError(f"budget = {budget!r} must be a whole number of evaluations, at least 1")
+    if method is None:
+        paper = sigma0 is not None or any(v is not None for v in paper_only.values())
+        method = "adaptive" if budget is not None and not paper else "plateau"
+    method = method.lower()
+    if method == "adaptive":
+        given = [name for name, value in paper_only.items() if value is not None]
+        if given:
+            raise ValueError(
+                f"{', '.join(given)}: options of the paper's loop, not of method='adaptive' "
+                "(use budget, or method='plateau')"
+            )
+    return method
+
+
+@dataclasses.dataclass
+class _PaperOptions:
+    """The paper loop's options, their defaults filled in (``iterations`` may stay None:
+    :meth:`schedule` works it out)."""
+
+    sigma0: float = 0.5
+    lr: float = 0.02
+    samples: int = 2
+    sampling: str = "radial"
+    antithetic: bool = True
+    annealer: Union[str, Annealer] = "paper"
+    sigma_min: float = PAPER_SIGMA_MIN
+    step: float = 1e-3
+    orthogonal: bool = False
+    parallel: bool = False
+    record_x: bool = False
+    final_evaluation: bool = True
+    iterations: Optional[int] = None
+
+    @classmethod
+    def given(cls, sigma0: Optional[float], paper_only: dict[str, Any]) -> _PaperOptions:
+        """The options given (not None), the defaults for the rest."""
+        options = cls(**{name: value for name, value in paper_only.items() if value is not None})
+        if sigma0 is not None:
+            options.sigma0 = sigma0
+        options.sampling = str(options.sampling)  # a Sampling's value
+        return options
+
+    def schedule(
+        self, budget: Optional[int], per_iteration: int, bounds: Any, shape: tuple[int, ...]
+    ) -> tuple[int, Annealer, Adam]:
+        """The number of iterations (given, the annealer's, ``budget // per_iteration``, or
+        400), the annealer and Adam (with ``bounds``)."""
+        iterations, annealer = self.iterations, self.annealer
+        if iterations is None:
+            if isinstance(annealer, Annealer):
+                iterations = annealer.iterations
+            elif budget is not None:
+                if budget < per_iteration:
+                    raise ValueError(
+                        f"budget = {budget} is less than one iteration "
+                        f"({per_iteration} evaluations)"
+                    )
+                iterations = budget // per_iteration
+            else:
+                iterations = 400
+        if iterations < 1:
+            raise ValueError(f"iterations = {iterations} must be at least 1")
+        if not isinstance(annealer, Annealer):
+            schedule = cast(_ScheduleName, str(annealer))  # a bad name is Annealer's ValueError
+            annealer = Annealer(
+                schedule, sigma0=self.sigma0, sigma_min=self.sigma_min, iterations=iterations
+            )
+        adam = Adam(self.lr, bounds=None if bounds is None else _parse_bounds(bounds, shape))
+        return iterations, annealer, adam
+
+
+_STOP_STATUS = {"budget spent": 0, "callback": 1, "target reached": 2, "converged": 3}
+
+
+def _adaptive_result(raw: dict[str, Any]) -> OptimizeResult:
+    """``method='adaptive'``'s result from the raw results of the Rust side."""
+    stop = raw["stop"]
+    nit = int(raw["nit"])
+    return OptimizeResult(
+        x=raw["x"],
+        fun=float(raw["fun"]),
+        nit=nit,
+        nfev=int(raw["nfev"]),
+        success=True,
+        status=_STOP_STATUS[stop],
+        message=f"stopped by the callback after iteration {nit}" if stop == "callback" else stop,
+        restarts=raw["restarts"],
+        sigma=raw["sigma"],
+        history=None,
+    )
+
+
+def _paper_result(raw: dict[str, Any], final_value: Optional[float]) -> OptimizeResult:
+    """The paper loop's result from the raw results of the Rust side; ``final_value`` is
+    ``fun`` at the final ``x`` when evaluated (else ``fun`` is the last iteration's mean)."""
+    history = History(
+        sigma=raw["sigma"],
+        grad_norm=raw["grad_norm"],
+        fun=raw["fun"],
+        nfev=raw["nfev_history"],
+        x=raw.get("x_history"),
+    )
+    nit = int(raw["nit"])
+    nfev = int(raw["nfev"])
+    if final_value is not None:
+        value = float(final_value)
+        nfev += 1
+    else:
+        value = float(history.fun[-1]) if len(history) else math.nan
+    if raw["stopped_by_callback"]:
+        status, message = 1, f"stopped by the callback after iteration {nit}"
+    else:
+        status, message = 0, f"completed {nit} iterations"
+    return OptimizeResult(
+        x=raw["x"],
+        fun=value,
+        nit=nit,
+        nfev=nfev,
+        success=True,
+        status=status,
+        message=message,
+        history=history,
+    )
+
+
 def _wants_intermediate_result(callback: Callable[..., Any]) -> bool:
     try:
         parameters = inspect.signature(callback).parameters
@@ -220,23 +404,23 @@ def _wants_intermediate_result(callback: Callable[..., Any]) -> bool:
 
 def minimize(
     fun: Callable[..., Any],
-    x0: Any,
+    x0: npt.ArrayLike,
     *,
     budget: Optional[int] = None,
     sigma0: Optional[float] = None,
     iterations: Optional[int] = None,
     lr: Optional[float] = None,
     samples: Optional[int] = None,
-    sampling: Optional[str] = None,
+    sampling: Optional[_SamplingName] = None,
     antithetic: Optional[bool] = None,
     seed: int = 0,
-    bounds: Any = None,
-    annealer: Any = None,
+    bounds: Optional[_Bounds] = None,
+    annealer: Union[_ScheduleName, Annealer, None] = None,
     sigma_min: Optional[float] = None,
     batched: bool = False,
     seeded: bool = False,
     callback: Optional[Callable[..., Any]] = None,
-    method: Optional[str] = None,
+    method: Optional[Literal["adaptive", "plateau", "fd", "spsa"]] = None,
     target: Optional[float] = None,
     population: Optional[int] = None,
     restarts: bool = True,
@@ -349,9 +533,7 @@ def minimize(
         stops the run within one call of ``fun``).
     """
     x0_array = np.asarray(x0, dtype=np.float64)
-    if budget is not None and (isinstance(budget, bool) or int(budget) != budget or budget < 1):
-        raise ValueError(f"budget = {budget!r} must be a whole number of evaluations, at least 1")
-    # The options of the paper's loop alone (None: not given; the defaults are below).
+    # The options of the paper's loop alone (None: not given; the defaults are _PaperOptions').
     paper_only = {
         "iterations": iterations,
         "lr": lr,
@@ -366,17 +548,8 @@ def minimize(
         "record_x": record_x,
         "final_evaluation": final_evaluation,
     }
-    if method is None:
-        paper = sigma0 is not None or any(v is not None for v in paper_only.values())
-        method = "adaptive" if budget is not None and not paper else "plateau"
-    method = method.lower()
-    if method == "adaptive":
-        given = [name for name, value in paper_only.items() if value is not None]
-        if given:
-            raise ValueError(
-                f"{', '.join(given)}: options of the paper's loop, not of method='adaptive' "
-                "(use budget, or method='plateau')"
-            )
+    chosen = _choose_method(method, budget, sigma0, paper_only)
+    if chosen == "adaptive":
         return _minimize_adaptive(
             fun,
             x0_array,
@@ -391,65 +564,45 @@ def minimize(
             seeded=seeded,
             callback=callback,
         )
-    sigma0 = 0.5 if sigma0 is None else sigma0
-    lr = 0.02 if lr is None else lr
-    samples = 2 if samples is None else samples
-    sampling = "radial" if sampling is None else sampling
-    antithetic = True if antithetic is None else antithetic
-    annealer = "paper" if annealer is None else annealer
-    sigma_min = PAPER_SIGMA_MIN if sigma_min is None else sigma_min
-    step = 1e-3 if step is None else step
-    orthogonal = False if orthogonal is None else orthogonal
-    parallel = False if parallel is None else parallel
-    record_x = False if record_x is None else record_x
-    final_evaluation = True if final_evaluation is None else final_evaluation
-    if method == "plateau":
+    o = _PaperOptions.given(sigma0, paper_only)
+    if chosen == "plateau":
         estimator: Any = PlateauFreeGradient(
             fun,
-            samples=samples,
-            sampling=str(sampling.value if isinstance(sampling, Sampling) else sampling),
-            antithetic=antithetic,
+            samples=o.samples,
+            sampling=o.sampling,
+            antithetic=o.antithetic,
             seed=seed,
             batched=batched,
             seeded=seeded,
-            orthogonal=orthogonal,
-            parallel=parallel,
+            orthogonal=o.orthogonal,
+            parallel=o.parallel,
         )
-        per_iteration = samples
-    elif method == "fd":
-        estimator = FiniteDifference(fun, step=step, seed=seed, batched=batched, seeded=seeded)
+        per_iteration = o.samples
+    elif chosen == "fd":
+        estimator = FiniteDifference(fun, step=o.step, seed=seed, batched=batched, seeded=seeded)
         per_iteration = 2 * max(1, x0_array.size)
-    elif method == "spsa":
+    elif chosen == "spsa":
         estimator = Spsa(fun, seed=seed, batched=batched, seeded=seeded)
         per_iteration = 2
     else:
         raise ValueError(
-            f"method = {method!r} is not a method: use 'adaptive', 'plateau', 'fd' or 'spsa'"
+            f"method = {chosen!r} is not a method: use 'adaptive', 'plateau', 'fd' or 'spsa'"
         )
-
-    if iterations is None:
-        if isinstance(annealer, Annealer):
-            iterations = annealer.iterations
-        elif budget is not None:
-            if budget < per_iteration:
-                raise ValueError(
-                    f"budget = {budget} is less than one iteration ({per_iteration} evaluations)"
-                )
-            iterations = budget // per_iteration
-        else:
-            iterations = 400
-    if iterations < 1:
-        raise ValueError(f"iterations = {iterations} must be at least 1")
-    if not isinstance(annealer, Annealer):
-        annealer = Annealer(str(annealer), sigma0=sigma0, sigma_min=sigma_min, iterations=iterations)
-
-    adam = Adam(lr, bounds=None if bounds is None else _parse_bounds(bounds, x0_array.shape))
+    iterations, annealer, adam = o.schedule(budget, per_iteration, bounds, x0_array.shape)
 
     raw_callback = None
     if callback is not None:
         as_result = _wants_intermediate_result(callback)
 
-        def raw_callback(iteration, x, sigma, value, gradient, nfev):  # type: ignore[no-untyped-def]
+        def raw_callback(
+            iteration: int,
+            x: _FloatArray,
+            sigma: float,
+            value: float,
+            gradient: _FloatArray,
+            nfev: int,
+        ) -> bool:
+            assert callback is not None
             if as_result:
                 info = OptimizeResult(
                     x=x, fun=value, nit=iteration + 1, nfev=nfev, sigma=sigma, jac=gradient
@@ -464,41 +617,12 @@ def minimize(
         annealer,
         iterations=iterations,
         callback=raw_callback,
-        record_x=record_x,
+        record_x=o.record_x,
     )
-    x = raw["x"]
-    nfev = int(raw["nfev"])
-    history = History(
-        sigma=raw["sigma"],
-        grad_norm=raw["grad_norm"],
-        fun=raw["fun"],
-        nfev=raw["nfev_history"],
-        x=raw.get("x_history"),
-    )
-    if final_evaluation:
-        value = _evaluate(fun, x, batched=batched, seeded=seeded, seed=seed)
-        nfev += 1
-    else:
-        value = float(history.fun[-1]) if len(history) else math.nan
-    nit = int(raw["nit"])
-    if raw["stopped_by_callback"]:
-        status, message = 1, f"stopped by the callback after iteration {nit}"
-    else:
-        status, message = 0, f"completed {nit} iterations"
-    return OptimizeResult(
-        x=x,
-        fun=value,
-        nit=nit,
-        nfev=nfev,
-        success=True,
-        status=status,
-        message=message,
-        history=history,
-    )
-
-
-_STOP_STATUS = {"budget spent": 0, "callback": 1, "target reached": 2, "converged": 3}
-
+    final = None
+    if o.final_evaluation:
+        final = _evaluate(fun, raw["x"], batched=batched, seeded=seeded, seed=seed)
+    return _paper_result(raw, final)
 
 def _minimize_adaptive(
     fun: Callable[..., Any],
@@ -520,27 +644,19 @@ def _minimize_adaptive(
     if callback is not None:
         as_result = _wants_intermediate_result(callback)
 
-        def raw_callback(nit, x, value, nfev):  # type: ignore[no-untyped-def]
+        def raw_callback(nit: int, x: _FloatArray, value: float, nfev: int) -> bool:
+            assert callback is not None
             if as_result:
                 return callback(OptimizeResult(x=x, fun=value, nit=nit, nfev=nfev)) is True
             return callback(x) is True
 
-    box = None
-    if bounds is not None:
-        box = _parse_bounds(bounds, x0.shape)
-        for i, (lo, hi) in enumerate(zip(*box)):
-            if not (math.isfinite(lo) and math.isfinite(hi)):
-                raise ValueError(
-                    f"bounds[{i}] = ({lo}, {hi}): method='adaptive' needs finite bounds "
-                    "(the box sets the starting spread and where restarts go)"
-                )
     raw = _plateau._minimize_adaptive(
         fun,
         x0,
         budget=None if budget is None else int(budget),
         seed=seed,
         sigma0=sigma0,
-        bounds=box,
+        bounds=_adaptive_bounds(bounds, x0.shape),
         target=target,
         population=population,
         restarts=restarts,
@@ -548,21 +664,7 @@ def _minimize_adaptive(
         seeded=seeded,
         callback=raw_callback,
     )
-    stop = raw["stop"]
-    nit = int(raw["nit"])
-    message = f"stopped by the callback after iteration {nit}" if stop == "callback" else stop
-    return OptimizeResult(
-        x=raw["x"],
-        fun=float(raw["fun"]),
-        nit=nit,
-        nfev=int(raw["nfev"]),
-        success=True,
-        status=_STOP_STATUS[stop],
-        message=message,
-        restarts=raw["restarts"],
-        sigma=raw["sigma"],
-        history=None,
-    )
+    return _adaptive_result(raw)
 
 
 def _evaluate(fun: Callable[..., Any], x: np.ndarray, *, batched: bool, seeded: bool, seed: int) -> float:
@@ -615,7 +717,7 @@ class AskTell:
         """Evaluations told so far."""
         return int(self._raw.nfev)
 
-    def ask(self) -> tuple[np.ndarray, np.ndarray]:
+    def ask(self) -> tuple[_FloatArray, npt.NDArray[np.uint64]]:
         """The next points and their seeds: ``X`` of shape ``(k, *x0.shape)`` (float64) and
         ``seeds``, a uint64 array of length ``k``.
 
@@ -630,12 +732,12 @@ class AskTell:
         ValueError
             Asked twice without a tell in between, or asked after the run has ended.
         """
-        out = self._raw.ask()
+        out: Optional[tuple[_FloatArray, npt.NDArray[np.uint64]]] = self._raw.ask()
         if out is None:
             raise ValueError("the run has ended: nothing more to ask (see result)")
         return out
 
-    def tell(self, values: Any) -> None:
+    def tell(self, values: npt.ArrayLike) -> None:
         """Tells the values of the asked points, in the order of ``X``: ``k`` floats.
 
         Raises
@@ -649,10 +751,11 @@ class AskTell:
         self._raw.tell(array.tolist())
 
     @property
-    def best(self) -> Optional[tuple[np.ndarray, float]]:
+    def best(self) -> Optional[tuple[_FloatArray, float]]:
         """``(x, fun)``, the best point told so far and its value (``method='adaptive'``);
         None before the first value and for the paper's loop."""
-        return self._raw.best()
+        best: Optional[tuple[_FloatArray, float]] = self._raw.best()
+        return best
 
     @property
     def result(self) -> OptimizeResult:
@@ -669,44 +772,8 @@ class AskTell:
                 f"the run has not ended ({self.nfev} evaluations told): ask and tell until done"
             )
         if self._method == "adaptive":
-            stop = raw["stop"]
-            return OptimizeResult(
-                x=raw["x"],
-                fun=float(raw["fun"]),
-                nit=int(raw["nit"]),
-                nfev=int(raw["nfev"]),
-                success=True,
-                status=_STOP_STATUS[stop],
-                message=stop,
-                restarts=raw["restarts"],
-                sigma=raw["sigma"],
-                history=None,
-            )
-        history = History(
-            sigma=raw["sigma"],
-            grad_norm=raw["grad_norm"],
-            fun=raw["fun"],
-            nfev=raw["nfev_history"],
-            x=raw.get("x_history"),
-        )
-        nit = int(raw["nit"])
-        nfev = int(raw["nfev"])
-        final = raw["final_value"]
-        if final is not None:
-            value = float(final)
-            nfev += 1
-        else:
-            value = float(history.fun[-1]) if len(history) else math.nan
-        return OptimizeResult(
-            x=raw["x"],
-            fun=value,
-            nit=nit,
-            nfev=nfev,
-            success=True,
-            status=0,
-            message=f"completed {nit} iterations",
-            history=history,
-        )
+            return _adaptive_result(raw)
+        return _paper_result(raw, raw["final_value"])
 
     def __repr__(self) -> str:
         state = "done" if self.done else "running"
@@ -714,23 +781,23 @@ class AskTell:
 
 
 def ask_tell(
-    x0: Any,
+    x0: npt.ArrayLike,
     *,
     budget: Optional[int] = None,
-    method: Optional[str] = None,
+    method: Optional[Literal["adaptive", "plateau", "paper"]] = None,
     seed: int = 0,
     sigma0: Optional[float] = None,
-    bounds: Any = None,
+    bounds: Optional[_Bounds] = None,
     target: Optional[float] = None,
     population: Optional[int] = None,
     restarts: bool = True,
     iterations: Optional[int] = None,
     lr: Optional[float] = None,
     samples: Optional[int] = None,
-    sampling: Optional[str] = None,
+    sampling: Optional[_SamplingName] = None,
     antithetic: Optional[bool] = None,
     orthogonal: Optional[bool] = None,
-    annealer: Any = None,
+    annealer: Union[_ScheduleName, Annealer, None] = None,
     sigma_min: Optional[float] = None,
     record_x: Optional[bool] = None,
     final_evaluation: Optional[bool] = None,
@@ -758,8 +825,6 @@ def ask_tell(
         Bad input, as :func:`minimize`.
     """
     x0_array = np.asarray(x0, dtype=np.float64)
-    if budget is not None and (isinstance(budget, bool) or int(budget) != budget or budget < 1):
-        raise ValueError(f"budget = {budget!r} must be a whole number of evaluations, at least 1")
     paper_only = {
         "iterations": iterations,
         "lr": lr,
@@ -772,89 +837,45 @@ def ask_tell(
         "record_x": record_x,
         "final_evaluation": final_evaluation,
     }
-    if method is None:
-        paper = sigma0 is not None or any(v is not None for v in paper_only.values())
-        method = "adaptive" if budget is not None and not paper else "plateau"
-    method = method.lower()
-    if method == "paper":
-        method = "plateau"
-    if method == "adaptive":
-        given = [name for name, value in paper_only.items() if value is not None]
-        if given:
-            raise ValueError(
-                f"{', '.join(given)}: options of the paper's loop, not of method='adaptive' "
-                "(use budget, or method='plateau')"
-            )
-        box = None
-        if bounds is not None:
-            box = _parse_bounds(bounds, x0_array.shape)
-            for i, (lo, hi) in enumerate(zip(*box)):
-                if not (math.isfinite(lo) and math.isfinite(hi)):
-                    raise ValueError(
-                        f"bounds[{i}] = ({lo}, {hi}): method='adaptive' needs finite bounds "
-                        "(the box sets the starting spread and where restarts go)"
-                    )
+    chosen = _choose_method(method, budget, sigma0, paper_only)
+    if chosen == "adaptive":
         raw = _plateau._AskTell.adaptive(
             x0_array,
             budget=None if budget is None else int(budget),
             seed=seed,
             sigma0=sigma0,
-            bounds=box,
+            bounds=_adaptive_bounds(bounds, x0_array.shape),
             target=target,
             population=population,
             restarts=restarts,
         )
         return AskTell(raw, "adaptive")
-    if method != "plateau":
+    if chosen not in ("plateau", "paper"):
         raise ValueError(
-            f"method = {method!r} is not a method of ask_tell: use 'adaptive' or 'plateau' "
+            f"method = {chosen!r} is not a method of ask_tell: use 'adaptive' or 'plateau' "
             "(the baselines 'fd' and 'spsa' are minimize's alone)"
         )
-    sigma0 = 0.5 if sigma0 is None else sigma0
-    lr = 0.02 if lr is None else lr
-    samples = 2 if samples is None else samples
-    sampling = "radial" if sampling is None else sampling
-    antithetic = True if antithetic is None else antithetic
-    orthogonal = False if orthogonal is None else orthogonal
-    annealer = "paper" if annealer is None else annealer
-    sigma_min = PAPER_SIGMA_MIN if sigma_min is None else sigma_min
-    record_x = False if record_x is None else record_x
-    final_evaluation = True if final_evaluation is None else final_evaluation
+    o = _PaperOptions.given(sigma0, paper_only)
     # The estimator's own checks, with its messages (it is never evaluated).
     PlateauFreeGradient(
         lambda x: 0.0,
-        samples=samples,
-        sampling=str(sampling.value if isinstance(sampling, Sampling) else sampling),
-        antithetic=antithetic,
-        orthogonal=orthogonal,
+        samples=o.samples,
+        sampling=o.sampling,
+        antithetic=o.antithetic,
+        orthogonal=o.orthogonal,
     )
-    if iterations is None:
-        if isinstance(annealer, Annealer):
-            iterations = annealer.iterations
-        elif budget is not None:
-            if budget < samples:
-                raise ValueError(
-                    f"budget = {budget} is less than one iteration ({samples} evaluations)"
-                )
-            iterations = budget // samples
-        else:
-            iterations = 400
-    if iterations < 1:
-        raise ValueError(f"iterations = {iterations} must be at least 1")
-    if not isinstance(annealer, Annealer):
-        annealer = Annealer(str(annealer), sigma0=sigma0, sigma_min=sigma_min, iterations=iterations)
-    adam = Adam(lr, bounds=None if bounds is None else _parse_bounds(bounds, x0_array.shape))
+    iterations, annealer, adam = o.schedule(budget, o.samples, bounds, x0_array.shape)
     raw = _plateau._AskTell.paper(
         x0_array,
         adam,
         annealer,
         iterations,
-        samples=samples,
-        sampling=str(sampling.value if isinstance(sampling, Sampling) else sampling),
-        antithetic=antithetic,
-        orthogonal=orthogonal,
+        samples=o.samples,
+        sampling=o.sampling,
+        antithetic=o.antithetic,
+        orthogonal=o.orthogonal,
         seed=seed,
-        record_x=record_x,
-        final_evaluation=final_evaluation,
+        record_x=o.record_x,
+        final_evaluation=o.final_evaluation,
     )
     return AskTell(raw, "plateau")

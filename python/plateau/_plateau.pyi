@@ -1,14 +1,164 @@
-"""The Rust extension module; its public names are re-exported by ``plateau``."""
+"""Type stubs of the Rust extension module ``plateau._plateau``; its public names are
+re-exported by ``plateau`` (whose own code, ``__init__.py``, is typed inline)."""
 
-from typing import Any
+from typing import Any, Callable, Literal, Optional, Sequence, Tuple, Union, final
 
-from plateau import PAPER_SIGMA_MIN as PAPER_SIGMA_MIN
-from plateau import PAPER_WARMUP as PAPER_WARMUP
-from plateau import Adam as Adam
-from plateau import Annealer as Annealer
-from plateau import FiniteDifference as FiniteDifference
-from plateau import PlateauFreeGradient as PlateauFreeGradient
-from plateau import Spsa as Spsa
+import numpy as np
+import numpy.typing as npt
+
+PAPER_SIGMA_MIN: float
+PAPER_WARMUP: float
+
+_ArrayLike = npt.ArrayLike
+_FloatArray = npt.NDArray[np.float64]
+# ``plateau.Sampling`` is a ``str``: its members are accepted too.
+_SamplingName = Union[Literal["radial", "per_coordinate", "gaussian"], str]
+_ScheduleName = Literal["paper", "constant", "exponential", "cosine"]
+
+@final
+class PlateauFreeGradient:
+    """The gradient of ``fun`` smoothed by a Gaussian of spread ``sigma`` in parameter space,
+    estimated from ``samples`` evaluations of ``fun`` per estimate.
+
+    ``fun(x) -> float`` (``x``: float64 array shaped like the ``x`` of ``estimate``);
+    ``seeded=True``: ``fun(x, seed)`` with one seed per antithetic pair (common random
+    numbers); ``batched=True``: ``fun(X) -> N values`` for ``X`` of shape ``(N, *x.shape)``,
+    once per estimate; both: ``fun(X, seeds)`` with ``seeds`` a uint64 array of length N.
+    ``parallel=True`` runs the evaluations of one estimate on several threads (useful when
+    ``fun`` releases the GIL); results are bit-for-bit those of the sequential run.
+    """
+
+    def __new__(
+        cls,
+        fun: Callable[..., Any],
+        samples: int = 2,
+        sampling: _SamplingName = "radial",
+        antithetic: bool = True,
+        seed: int = 0,
+        batched: bool = False,
+        seeded: bool = False,
+        orthogonal: bool = False,
+        parallel: bool = False,
+    ) -> "PlateauFreeGradient": ...
+    def estimate(self, x: _ArrayLike, sigma: Union[float, _ArrayLike]) -> _FloatArray:
+        """The gradient of ``fun`` smoothed by N(0, sigma^2 I) at ``x``, shaped like ``x``.
+        ``sigma``: a positive float, or one positive spread per element of ``x``."""
+    def reset(self) -> None:
+        """The next estimate repeats the first one's draws."""
+    @property
+    def fun(self) -> Callable[..., Any]: ...
+    @property
+    def samples(self) -> int: ...
+    @property
+    def sampling(self) -> str: ...
+    @property
+    def antithetic(self) -> bool: ...
+    @property
+    def seed(self) -> int: ...
+    @property
+    def batched(self) -> bool: ...
+    @property
+    def seeded(self) -> bool: ...
+    @property
+    def orthogonal(self) -> bool: ...
+    @property
+    def parallel(self) -> bool: ...
+    @property
+    def estimates(self) -> int:
+        """Estimates made since construction or the last ``reset()``."""
+    @property
+    def nfev(self) -> int:
+        """Evaluations of ``fun`` since construction."""
+
+@final
+class FiniteDifference:
+    """Central finite differences of step ``step``: the unsmoothed gradient (zero on a plateau);
+    ``2 n`` evaluations per estimate."""
+
+    def __new__(
+        cls,
+        fun: Callable[..., Any],
+        step: float = 1e-3,
+        seed: int = 0,
+        batched: bool = False,
+        seeded: bool = False,
+    ) -> "FiniteDifference": ...
+    def estimate(self, x: _ArrayLike, sigma: Optional[float] = None) -> _FloatArray: ...
+    @property
+    def step(self) -> float: ...
+    @property
+    def seed(self) -> int: ...
+    @property
+    def nfev(self) -> int: ...
+
+@final
+class Spsa:
+    """SPSA: one Rademacher direction per estimate, perturbation size ``sigma``; 2 evaluations."""
+
+    def __new__(
+        cls, fun: Callable[..., Any], seed: int = 0, batched: bool = False, seeded: bool = False
+    ) -> "Spsa": ...
+    def estimate(self, x: _ArrayLike, sigma: float) -> _FloatArray: ...
+    @property
+    def seed(self) -> int: ...
+    @property
+    def nfev(self) -> int: ...
+
+@final
+class Annealer:
+    """The spread sigma per iteration: ``paper`` (sigma0 for ``warmup`` of the run, then linear
+    to ``sigma_min``), ``constant``, ``exponential``, ``cosine``."""
+
+    def __new__(
+        cls,
+        schedule: _ScheduleName = "paper",
+        sigma0: float = 0.5,
+        sigma_min: float = 0.01,
+        iterations: int = 400,
+        warmup: float = 0.5,
+    ) -> "Annealer": ...
+    @staticmethod
+    def paper(sigma0: float = 0.5, iterations: int = 400) -> "Annealer": ...
+    @staticmethod
+    def constant(sigma: float = 0.5, iterations: int = 400) -> "Annealer": ...
+    @staticmethod
+    def exponential(sigma0: float = 0.5, sigma_min: float = 0.01, iterations: int = 400) -> "Annealer": ...
+    @staticmethod
+    def cosine(sigma0: float = 0.5, sigma_min: float = 0.01, iterations: int = 400) -> "Annealer": ...
+    def sigma(self, iteration: int) -> float: ...
+    def sigmas(self) -> _FloatArray: ...
+    @property
+    def sigma0(self) -> float: ...
+    @property
+    def sigma_min(self) -> float: ...
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def schedule(self) -> str: ...
+    @property
+    def warmup(self) -> Optional[float]: ...
+
+@final
+class Adam:
+    """Adam with bias correction; ``bounds=(lower, upper)`` projects x after every step."""
+
+    def __new__(
+        cls,
+        lr: float = 0.02,
+        beta1: float = 0.9,
+        beta2: float = 0.999,
+        epsilon: float = 1e-8,
+        bounds: Optional[Tuple[Sequence[float], Sequence[float]]] = None,
+    ) -> "Adam": ...
+    def step(self, x: _ArrayLike, gradient: _ArrayLike) -> _FloatArray:
+        """One step downhill; returns the new x."""
+    def reset(self) -> None: ...
+    @property
+    def lr(self) -> float: ...
+    @property
+    def steps(self) -> int: ...
+    @property
+    def bounds(self) -> Optional[Tuple[_FloatArray, _FloatArray]]: ...
 
 __all__ = [
     "Adam",

@@ -114,24 +114,10 @@ impl PyAskTell {
         restarts: bool,
     ) -> PyResult<Self> {
         let (theta, shape) = to_vector(py, x0, "x0")?;
-        let mut minimizer = RsMinimizer::without_objective()
+        let minimizer = RsMinimizer::without_objective()
             .seed(seed)
             .restarts(restarts);
-        if let Some(b) = budget {
-            minimizer = minimizer.budget(b);
-        }
-        if let Some(s) = sigma0 {
-            minimizer = minimizer.sigma0(s);
-        }
-        if let Some((lower, upper)) = bounds {
-            minimizer = minimizer.bounds(lower, upper);
-        }
-        if let Some(t) = target {
-            minimizer = minimizer.target(t);
-        }
-        if let Some(p) = population {
-            minimizer = minimizer.population(p);
-        }
+        let minimizer = adaptive_options(minimizer, budget, sigma0, bounds, target, population);
         let run = minimizer.ask_tell(&theta).map_err(value_error)?;
         Ok(PyAskTell {
             run: Run::Adaptive(Box::new(run)),

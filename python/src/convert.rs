@@ -33,6 +33,33 @@ pub(crate) fn to_vector(
     Ok((values, shape))
 }
 
+/// `builder` with `set` applied when a value is given: an option that Python passes as None
+/// keeps the builder's default.
+pub(crate) fn maybe<B, V>(builder: B, value: Option<V>, set: impl FnOnce(B, V) -> B) -> B {
+    match value {
+        Some(v) => set(builder, v),
+        None => builder,
+    }
+}
+
+/// `minimizer` with the options of `plateau.minimize(method='adaptive')` that were given.
+pub(crate) fn adaptive_options<F>(
+    minimizer: RsMinimizer<F>,
+    budget: Option<usize>,
+    sigma0: Option<f64>,
+    bounds: Option<Bounds>,
+    target: Option<f64>,
+    population: Option<usize>,
+) -> RsMinimizer<F> {
+    let minimizer = maybe(minimizer, budget, RsMinimizer::budget);
+    let minimizer = maybe(minimizer, sigma0, RsMinimizer::sigma0);
+    let minimizer = maybe(minimizer, bounds, |m, (lower, upper)| {
+        m.bounds(lower, upper)
+    });
+    let minimizer = maybe(minimizer, target, RsMinimizer::target);
+    maybe(minimizer, population, RsMinimizer::population)
+}
+
 /// A spread: one number, or one per coordinate.
 pub(crate) enum Spread {
     Scalar(f64),

@@ -53,25 +53,8 @@ impl PyPlateauFreeGradient {
         orthogonal: bool,
         parallel: bool,
     ) -> PyResult<Self> {
-        if !fun.bind(py).is_callable() {
-            return Err(PyTypeError::new_err(format!(
-                "fun must be callable, got {}",
-                short_repr(fun.bind(py))
-            )));
-        }
         let sampling = parse_sampling(sampling)?;
-        if samples == 0 {
-            return Err(value_error(Error::ZeroSamples));
-        }
-        if antithetic && samples % 2 == 1 {
-            return Err(PyValueError::new_err(format!(
-                "samples = {samples}: antithetic pairs need an even number of samples; use an even count or antithetic=False"
-            )));
-        }
-        if orthogonal && sampling == Sampling::PerCoordinate {
-            return Err(value_error(Error::OrthogonalUnsupported(sampling)));
-        }
-        let objective = PyObjective::new(fun.clone_ref(py), batched, seeded);
+        let objective = PyObjective::callable(py, fun.clone_ref(py), batched, seeded)?;
         let shared = objective.shared.clone();
         let inner = RsPlateauFreeGradient::new(objective)
             .samples(samples)
@@ -80,6 +63,13 @@ impl PyPlateauFreeGradient {
             .orthogonal(orthogonal)
             .seed(seed)
             .parallel(parallel);
+        // The estimator's own checks, with Python's spelling of the odd-samples remedy.
+        inner.validate().map_err(|e| match e {
+            Error::OddSamples(samples) => PyValueError::new_err(format!(
+                "samples = {samples}: antithetic pairs need an even number of samples; use an even count or antithetic=False"
+            )),
+            e => value_error(e),
+        })?;
         Ok(PyPlateauFreeGradient {
             inner,
             shared,
@@ -104,16 +94,12 @@ impl PyPlateauFreeGradient {
         x: &Bound<'py, PyAny>,
         sigma: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let (theta, shape) = to_vector(py, x, "x")?;
         let spread = to_spread(py, sigma)?;
-        self.shared.set_shape(&shape);
         let inner = &mut self.inner;
-        let result = py.detach(|| match &spread {
-            Spread::Scalar(s) => inner.estimate(&theta, *s),
-            Spread::PerCoordinate(s) => inner.estimate_with_spreads(&theta, s),
-        });
-        let estimate = self.shared.finish(result)?;
-        array_like(py, estimate.gradient, &shape)
+        estimate_shaped(py, &self.shared, x, |theta| match &spread {
+            Spread::Scalar(s) => inner.estimate(theta, *s),
+            Spread::PerCoordinate(s) => inner.estimate_with_spreads(theta, s),
+        })
     }
 
     /// Restarts the count of estimates: the next estimate repeats the first one's draws.
@@ -213,10 +199,7 @@ impl PyFiniteDifference {
         batched: bool,
         seeded: bool,
     ) -> PyResult<Self> {
-        if !fun.bind(py).is_callable() {
-            return Err(PyTypeError::new_err("fun must be callable"));
-        }
-        let objective = PyObjective::new(fun, batched, seeded);
+        let objective = PyObjective::callable(py, fun, batched, seeded)?;
         let shared = objective.shared.clone();
         let inner = RsFiniteDifference::new(objective, step)
             .map_err(value_error)?
@@ -239,7 +222,8 @@ impl PyFiniteDifference {
         sigma: Option<f64>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let _ = sigma;
-        estimate_array(py, &mut self.inner, &self.shared, x, 1.0)
+        let inner = &mut self.inner;
+        estimate_shaped(py, &self.shared, x, |theta| inner.estimate(theta, 1.0))
     }
 
     /// The step h.
@@ -282,10 +266,7 @@ impl PySpsa {
         batched: bool,
         seeded: bool,
     ) -> PyResult<Self> {
-        if !fun.bind(py).is_callable() {
-            return Err(PyTypeError::new_err("fun must be callable"));
-        }
-        let objective = PyObjective::new(fun, batched, seeded);
+        let objective = PyObjective::callable(py, fun, batched, seeded)?;
         let shared = objective.shared.clone();
         Ok(PySpsa {
             inner: RsSpsa::new(objective).seed(seed),
@@ -301,7 +282,8 @@ impl PySpsa {
         x: &Bound<'py, PyAny>,
         sigma: f64,
     ) -> PyResult<Bound<'py, PyAny>> {
-        estimate_array(py, &mut self.inner, &self.shared, x, sigma)
+        let inner = &mut self.inner;
+        estimate_shaped(py, &self.shared, x, |theta| inner.estimate(theta, sigma))
     }
 
     /// The seed.
@@ -320,18 +302,17 @@ impl PySpsa {
     }
 }
 
-/// One estimate by a baseline, shaped like `x`: the GIL released while it runs, an exception
-/// of `fun` raised unchanged.
-fn estimate_array<'py, G: GradientEstimator + Send>(
+/// One estimate at `x`, shaped like `x`: `estimate` runs on the flat `x` with the GIL
+/// released, and an exception of `fun` comes out unchanged.
+fn estimate_shaped<'py>(
     py: Python<'py>,
-    inner: &mut G,
     shared: &Shared,
     x: &Bound<'py, PyAny>,
-    sigma: f64,
+    estimate: impl FnOnce(&[f64]) -> Result<plateau::Estimate, Error> + Send,
 ) -> PyResult<Bound<'py, PyAny>> {
     let (theta, shape) = to_vector(py, x, "x")?;
     shared.set_shape(&shape);
-    let result = py.detach(|| inner.estimate(&theta, sigma));
+    let result = py.detach(|| estimate(&theta));
     let estimate = shared.finish(result)?;
     array_like(py, estimate.gradient, &shape)
 }

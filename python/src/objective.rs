@@ -83,6 +83,22 @@ impl PyObjective {
         }
     }
 
+    /// [`PyObjective::new`] for a `fun` that the caller handed in: TypeError unless callable.
+    pub(crate) fn callable(
+        py: Python<'_>,
+        fun: Py<PyAny>,
+        batched: bool,
+        seeded: bool,
+    ) -> PyResult<Self> {
+        if !fun.bind(py).is_callable() {
+            return Err(PyTypeError::new_err(format!(
+                "fun must be callable, got {}",
+                short_repr(fun.bind(py))
+            )));
+        }
+        Ok(PyObjective::new(fun, batched, seeded))
+    }
+
     /// One point as a fresh numpy array shaped like `x`.
     pub(crate) fn point<'py>(&self, py: Python<'py>, point: &[f64]) -> PyResult<Bound<'py, PyAny>> {
         let array = PyArray1::from_slice(py, point);

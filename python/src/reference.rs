@@ -120,16 +120,8 @@ pub(crate) fn _rust_reference_minimize_adaptive<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     macro_rules! run {
         ($objective:expr) => {{
-            let mut m = RsMinimizer::new($objective).seed(seed);
-            if let Some(b) = budget {
-                m = m.budget(b);
-            }
-            if let Some(s) = sigma0 {
-                m = m.sigma0(s);
-            }
-            if let Some((lower, upper)) = bounds {
-                m = m.bounds(lower, upper);
-            }
+            let m = RsMinimizer::new($objective).seed(seed);
+            let m = adaptive_options(m, budget, sigma0, bounds, None, None);
             m.run(&x0).map_err(value_error)?
         }};
     }

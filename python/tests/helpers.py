@@ -1,8 +1,13 @@
 """Reference functions shared by the tests."""
 
+import _thread
+import contextlib
 import math
+import threading
+import time
 
 import numpy as np
+import pytest
 
 
 def bumpy(x):
@@ -55,3 +60,32 @@ def staircase_batch(xs):
     d = np.floor(xs + 0.5) - np.asarray(STAIR_TARGET)
     sq = d * d
     return (sq[:, 0] + sq[:, 1]) + sq[:, 2]
+
+
+def interrupting(fun, at=5):
+    """``fun`` that sends the main thread a KeyboardInterrupt on its ``at``-th call, and the list
+    holding its count of calls."""
+    count = [0]
+
+    def wrapped(x):
+        count[0] += 1
+        if count[0] == at:
+            _thread.interrupt_main()
+        return fun(x)
+
+    return wrapped, count
+
+
+@contextlib.contextmanager
+def interrupted_within(seconds=5.0, after=0.3):
+    """Interrupts the main thread ``after`` seconds in; the block must end in KeyboardInterrupt
+    within ``seconds``."""
+    timer = threading.Timer(after, _thread.interrupt_main)
+    start = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            yield
+    finally:
+        timer.cancel()
+    assert time.perf_counter() - start < seconds

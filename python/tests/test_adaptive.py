@@ -7,7 +7,13 @@ import pytest
 
 import plateau
 from plateau import _plateau
-from helpers import staircase, staircase_batch, staircase_seeded
+from helpers import (
+    interrupted_within,
+    interrupting,
+    staircase,
+    staircase_batch,
+    staircase_seeded,
+)
 
 X0 = [0.0, 0.0, 0.0]  # staircase(X0) = 1 + 4 + 9 = 14
 
@@ -209,29 +215,11 @@ def test_non_number_is_a_type_error():
 
 
 def test_keyboard_interrupt_stops_the_adaptive_run_within_one_call():
-    import _thread
-    import threading
-    import time
-
-    count = [0]
-
-    def fun(x):
-        count[0] += 1
-        if count[0] == 5:
-            _thread.interrupt_main()
-        return staircase(x)
-
+    fun, count = interrupting(staircase)
     with pytest.raises(KeyboardInterrupt):
         plateau.minimize(fun, X0, budget=10**6)
     assert count[0] <= 6
 
     # `sum` runs no bytecode: only the check before each call of fun sees the signal.
-    timer = threading.Timer(0.3, _thread.interrupt_main)
-    start = time.perf_counter()
-    timer.start()
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            plateau.minimize(sum, [0.5, 0.5], budget=10**9, bounds=(-1.0, 1.0))  # finite points
-    finally:
-        timer.cancel()
-    assert time.perf_counter() - start < 5.0
+    with interrupted_within(5.0):
+        plateau.minimize(sum, [0.5, 0.5], budget=10**9, bounds=(-1.0, 1.0))  # finite points

@@ -1,14 +1,12 @@
 """Every bad input is a ValueError naming the value; fun's own exceptions come out unchanged."""
 
 import math
-import threading
-import time
-import _thread
 
 import numpy as np
 import pytest
 
 import plateau
+from helpers import interrupted_within, interrupting
 
 
 def linear(x):
@@ -189,14 +187,7 @@ def test_exception_from_callback_comes_out_unchanged():
 
 
 def test_keyboard_interrupt_stops_minimize_within_one_call():
-    count = [0]
-
-    def fun(x):
-        count[0] += 1
-        if count[0] == 5:
-            _thread.interrupt_main()
-        return float(x[0])
-
+    fun, count = interrupting(linear)
     with pytest.raises(KeyboardInterrupt):
         plateau.minimize(fun, [0.0], iterations=10_000)
     assert count[0] <= 6
@@ -204,12 +195,5 @@ def test_keyboard_interrupt_stops_minimize_within_one_call():
 
 def test_keyboard_interrupt_reaches_a_fun_without_python_bytecode():
     # `sum` runs no bytecode: only the check between evaluations sees the signal.
-    timer = threading.Timer(0.3, _thread.interrupt_main)
-    start = time.perf_counter()
-    timer.start()
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            plateau.minimize(sum, [0.0, 0.0], iterations=10**9)
-    finally:
-        timer.cancel()
-    assert time.perf_counter() - start < 5.0
+    with interrupted_within(5.0):
+        plateau.minimize(sum, [0.0, 0.0], iterations=10**9)

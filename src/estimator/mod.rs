@@ -367,22 +367,13 @@ impl PlateauFreeGradient<NoObjective> {
         PlateauFreeGradient {
             objective: NoObjective,
             core: Core::default(),
-            evaluator: evaluate_nothing,
+            // Never called (`estimate` needs an `Objective`), and harmless if it were.
+            evaluator: |_, _, _, out, _| {
+                out.fill(f64::NAN);
+                Ok(())
+            },
         }
     }
-}
-
-/// The evaluator of [`NoObjective`]: never called (`estimate` needs an [`Objective`]), and
-/// harmless if it were.
-fn evaluate_nothing(
-    _: &NoObjective,
-    _: Points<'_>,
-    _: &[u64],
-    out: &mut [f64],
-    _: bool,
-) -> Result<(), Panic> {
-    out.fill(f64::NAN);
-    Ok(())
 }
 
 impl<F> PlateauFreeGradient<F> {
