@@ -312,7 +312,11 @@ where
         snapshots,
         time,
     );
-    let (history, snapshots, optimisation_time) = recorder.finish();
+    let (history, mut snapshots, optimisation_time) = recorder.finish();
+    if interrupted {
+        // The strip of an interrupted run ends where it stopped.
+        snapshots.push(state.theta.clone());
+    }
     let ended = Ended {
         iterations: state.iteration,
         evaluations: state.history.evaluations,
