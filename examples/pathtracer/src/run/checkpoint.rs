@@ -321,6 +321,24 @@ impl Checkpoint {
     /// has one row per completed iteration, the points have one dimension.
     fn check_consistent(&self) -> Result<(), String> {
         let s = &self.settings;
+        // The run's settings are those asked for, but for what a time budget plans: fewer
+        // pixels, spp or iterations.
+        let r = &self.requested;
+        let planned = Settings {
+            scale: r.scale,
+            spp: r.spp,
+            iterations: r.iterations,
+            eval_every: r.eval_every,
+            ..s.clone()
+        };
+        let fits = if r.budget_seconds.is_some() {
+            planned == *r && s.spp <= r.spp && s.iterations <= r.iterations
+        } else {
+            s == r
+        };
+        if !fits {
+            return Err("the run's settings are not those asked for".into());
+        }
         if s.iterations == 0 || s.samples == 0 || s.spp == 0 || s.eval_every == 0 {
             return Err("iterations, samples, spp and eval_every must be at least 1".into());
         }

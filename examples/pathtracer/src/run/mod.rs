@@ -136,6 +136,36 @@ pub fn optimize_with(task: &Task, s: &Settings, ctl: Control<'_>) -> Result<Outc
     Ok(outcome)
 }
 
+/// What an earlier run left at a checkpoint file, for the commands that make many runs
+/// (`all`, the experiments): a finished run (kept), a run to continue, or nothing usable.
+pub enum Earlier {
+    /// The checkpoint of a finished run of this task and these settings.
+    Finished(Box<Checkpoint>),
+    /// The checkpoint of an unfinished run of this task and these settings.
+    Unfinished(Box<Checkpoint>),
+    /// No checkpoint, or one that is refused (the reason, if there was a file): start over.
+    None(Option<CheckpointError>),
+}
+
+impl Earlier {
+    /// Reads and checks the checkpoint at `path` for a run of `task` with the settings
+    /// `requested`.
+    pub fn at(path: &Path, task: &Task, requested: &Settings) -> Earlier {
+        let checked =
+            Checkpoint::load(path).and_then(|c| c.check_matches(task, requested, path).map(|()| c));
+        match checked {
+            Ok(c) if c.finished => Earlier::Finished(Box::new(c)),
+            Ok(c) => Earlier::Unfinished(Box::new(c)),
+            Err(CheckpointError::Unreadable { error, .. })
+                if error.kind() == std::io::ErrorKind::NotFound =>
+            {
+                Earlier::None(None)
+            }
+            Err(e) => Earlier::None(Some(e)),
+        }
+    }
+}
+
 /// What both loops are handed: the task, the settings, the reference, the start, the
 /// control and the checkpoint writer.
 struct Run<'a> {
