@@ -24,8 +24,10 @@ from __future__ import annotations
 
 import enum
 import inspect
+import json
 import math
-from typing import Any, Callable, Optional
+import os
+from typing import Any, Callable, Optional, Union
 
 import numpy as np
 
@@ -240,6 +242,8 @@ def minimize(
     parallel: Optional[bool] = None,
     record_x: Optional[bool] = None,
     final_evaluation: Optional[bool] = None,
+    checkpoint: Optional[Union[str, os.PathLike[str]]] = None,
+    checkpoint_every: Optional[int] = None,
 ) -> OptimizeResult:
     """Minimise ``fun`` from ``x0``: ``minimize(fun, x0, budget=...)`` is the first thing to try.
 
@@ -324,6 +328,18 @@ def minimize(
     final_evaluation : bool
         Evaluate ``fun`` once at the final ``x`` for ``result.fun`` (default). When False,
         ``result.fun`` is the last iteration's mean value.
+    checkpoint : str or path, optional
+        The paper's loop: a file that keeps the run's state (theta, Adam's moments, the
+        iteration, the random streams' position, the history so far and the settings), written
+        atomically (temporary file, fsync, rename) every ``checkpoint_every`` iterations, at
+        the end, and when ``fun`` or ``callback`` raises (``KeyboardInterrupt`` included). If
+        the file exists, the run continues from it: the result is bit for bit that of the run
+        never interrupted. A file of other settings, or a damaged one, is a ValueError naming
+        the path and the difference, and is not used. Not for ``method='adaptive'`` (its state
+        lives inside the Rust ``Minimizer``): a ValueError.
+    checkpoint_every : int, optional
+        Iterations between checkpoints; 0: only at the end and on an exception (default:
+        about every 30 seconds, from the measured time per iteration).
 
     Returns
     -------
@@ -365,7 +381,18 @@ def minimize(
         paper = sigma0 is not None or any(v is not None for v in paper_only.values())
         method = "adaptive" if budget is not None and not paper else "plateau"
     method = method.lower()
+    if checkpoint_every is not None and (
+        isinstance(checkpoint_every, bool)
+        or int(checkpoint_every) != checkpoint_every
+        or checkpoint_every < 0
+    ):
+        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be a whole number >= 0")
     if method == "adaptive":
+        if checkpoint is not None:
+            raise ValueError(
+                "checkpoint: supported by the paper's loop (method='plateau', 'fd' or 'spsa'); "
+                "method='adaptive' keeps its state inside the Rust Minimizer"
+            )
         given = [name for name, value in paper_only.items() if value is not None]
         if given:
             raise ValueError(
@@ -438,7 +465,36 @@ def minimize(
     if not isinstance(annealer, Annealer):
         annealer = Annealer(str(annealer), sigma0=sigma0, sigma_min=sigma_min, iterations=iterations)
 
-    adam = Adam(lr, bounds=None if bounds is None else _parse_bounds(bounds, x0_array.shape))
+    parsed_bounds = None if bounds is None else _parse_bounds(bounds, x0_array.shape)
+    adam = Adam(lr, bounds=parsed_bounds)
+    settings = None
+    if checkpoint is not None:
+        # What a continued run must share with the run it continues; compared key by key in
+        # alphabetical order (the schedule, whose repr holds sigma0 and iterations, after them).
+        settings = json.dumps(
+            _jsonable(
+                {
+                    "method": method,
+                    "x0": x0_array.ravel().tolist(),
+                    "shape": list(x0_array.shape),
+                    "samples": samples,
+                    "sampling": str(sampling.value if isinstance(sampling, Sampling) else sampling),
+                    "antithetic": antithetic,
+                    "orthogonal": orthogonal,
+                    "seed": seed,
+                    "lr": lr,
+                    "schedule": repr(annealer),
+                    "sigma0": sigma0,
+                    "sigma_min": sigma_min,
+                    "iterations": iterations,
+                    "step": step,
+                    "batched": batched,
+                    "seeded": seeded,
+                    "record_x": record_x,
+                    "bounds": parsed_bounds,
+                }
+            )
+        )
 
     raw_callback = None
     if callback is not None:
@@ -460,6 +516,9 @@ def minimize(
         iterations=iterations,
         callback=raw_callback,
         record_x=record_x,
+        checkpoint=None if checkpoint is None else os.fspath(checkpoint),
+        checkpoint_every=checkpoint_every,
+        settings=settings,
     )
     x = raw["x"]
     nfev = int(raw["nfev"])
@@ -490,6 +549,17 @@ def minimize(
         message=message,
         history=history,
     )
+
+
+def _jsonable(value: Any) -> Any:
+    """``value`` with tuples as lists and non-finite floats as their repr, for JSON."""
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return repr(value)
+    return value
 
 
 _STOP_STATUS = {"budget spent": 0, "callback": 1, "target reached": 2, "converged": 3}

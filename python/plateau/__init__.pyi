@@ -2,6 +2,7 @@
 the pure-Python ``minimize``)."""
 
 import enum
+import os
 from typing import Any, Callable, Literal, Optional, Sequence, SupportsFloat, Tuple, Union, final
 
 import numpy as np
@@ -236,6 +237,8 @@ def minimize(
     parallel: Optional[bool] = None,
     record_x: Optional[bool] = None,
     final_evaluation: Optional[bool] = None,
+    checkpoint: Union[str, os.PathLike[str], None] = None,
+    checkpoint_every: Optional[int] = None,
 ) -> OptimizeResult:
     """Minimise ``fun`` from ``x0``. ``minimize(fun, x0, budget=...)`` runs the library's
     general-purpose search (``method='adaptive'``, the Rust ``plateau::Minimizer``; the
@@ -245,7 +248,10 @@ def minimize(
     default (``sigma0=0.5``, ``lr=0.02``, ``samples=2``, ``sampling='radial'``,
     ``antithetic=True``, ``annealer='paper'``, ``sigma_min=0.01``, ``step=1e-3``,
     ``orthogonal=False``, ``parallel=False``, ``record_x=False``,
-    ``final_evaluation=True``)."""
+    ``final_evaluation=True``). ``checkpoint=path`` (the paper's loop) keeps the run's state
+    in a file, written atomically every ``checkpoint_every`` iterations (default: about every
+    30 s; 0: only at the end and on an exception) and when ``fun`` raises, and continues from
+    it when it exists and matches the settings, bit for bit."""
 
 __all__ = [
     "PAPER_SIGMA_MIN",

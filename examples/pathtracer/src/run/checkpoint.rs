@@ -285,6 +285,24 @@ impl Checkpoint {
     /// # Errors
     /// As [`Checkpoint::load`].
     pub fn parse(bytes: &[u8], path: &Path) -> Result<Checkpoint, CheckpointError> {
+        let c = Checkpoint::parse_any_build(bytes, path)?;
+        let current = Build::current();
+        if c.build != current || current.executable == "unknown" {
+            return Err(CheckpointError::OtherBuild {
+                path: path.into(),
+                found: c.build,
+            });
+        }
+        Ok(c)
+    }
+
+    /// [`Checkpoint::parse`] without the check of the build: the format, the JSON and the
+    /// consistency of the parts (to inspect a checkpoint, and for the fuzzer, whose inputs
+    /// cannot know the executable's hash).
+    ///
+    /// # Errors
+    /// As [`Checkpoint::load`], but never [`CheckpointError::OtherBuild`].
+    pub fn parse_any_build(bytes: &[u8], path: &Path) -> Result<Checkpoint, CheckpointError> {
         // The format first, so that a file of another layout says so rather than "damaged".
         #[derive(Deserialize)]
         struct Head {
@@ -302,13 +320,6 @@ impl Checkpoint {
             });
         }
         let c: Checkpoint = serde_json::from_slice(bytes).map_err(damaged)?;
-        let current = Build::current();
-        if c.build != current || current.executable == "unknown" {
-            return Err(CheckpointError::OtherBuild {
-                path: path.into(),
-                found: c.build,
-            });
-        }
         c.check_consistent()
             .map_err(|reason| CheckpointError::Inconsistent {
                 path: path.into(),
