@@ -370,3 +370,31 @@ fn a_second_ctrl_c_exits_at_once() {
     assert!(checkpoint.ends_with('}'), "the checkpoint is whole");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Combinations that cannot run are refused before any work, like a bad value: exit 2, one
+/// line naming the arguments, no files.
+#[test]
+fn impossible_combinations_exit_2_before_any_work() {
+    let out = fresh("combination");
+    let o = out.display().to_string();
+    for (args, named) in [
+        (
+            vec![
+                "optimize", "shadow", "--method", "adaptive", "--budget", "5", "--out", &o,
+            ],
+            "--budget",
+        ),
+        (
+            vec!["optimize", "shadow", "--out", &o, "--resume", &o],
+            "--resume",
+        ),
+    ] {
+        let t = std::time::Instant::now();
+        let (code, stderr) = run(&args);
+        assert_eq!(code, Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(named), "{stderr}");
+        assert!(t.elapsed().as_secs_f64() < 1.0);
+        assert!(!out.exists());
+    }
+}

@@ -61,12 +61,20 @@ impl Every {
 
     /// The iterations to run after `done` before the next checkpoint, given the seconds per
     /// iteration measured so far (`None` for never, until the end).
+    ///
+    /// ```
+    /// use pathtracer::run::Every;
+    /// assert_eq!(Every::Auto.next_after(0, 0.0), Some(1)); // measure one iteration first
+    /// assert_eq!(Every::Auto.next_after(5, 0.25), Some(120)); // then about 30 s worth
+    /// assert_eq!(Every::from_option(Some(0)).next_after(5, 0.25), None); // only at the end
+    /// ```
     pub fn next_after(self, done: usize, seconds_per_iteration: f64) -> Option<usize> {
         match self {
             Every::End => None,
             Every::Iterations(k) => Some(k.max(1)),
             Every::Auto => {
-                let k = if done == 0 || !(seconds_per_iteration > 0.0) {
+                let measured = seconds_per_iteration > 0.0; // false for NaN too
+                let k = if done == 0 || !measured {
                     // Nothing measured yet: one iteration, then measure.
                     1.0
                 } else {
@@ -363,7 +371,8 @@ impl Checkpoint {
         {
             return Err("scale, fov_degrees or budget_seconds is out of range".into());
         }
-        if !(self.optimisation_seconds >= 0.0 && self.render_seconds >= 0.0) {
+        let non_negative = self.optimisation_seconds >= 0.0 && self.render_seconds >= 0.0;
+        if !non_negative {
             return Err("the times must be non-negative".into());
         }
         let done = self.history.len();
@@ -515,6 +524,15 @@ fn show(value: &serde_json::Value) -> String {
 /// flushed so the rename itself survives a crash. A reader, or a crash at any moment, sees
 /// the old file or the new one, never a mix. On error the temporary file is removed and
 /// `path` is untouched.
+///
+/// ```
+/// use std::io::Write;
+/// let path = std::env::temp_dir().join(format!("replace-doc-{}.json", std::process::id()));
+/// pathtracer::run::checkpoint::replace_file(&path, |f| f.write_all(b"{}"))?;
+/// assert_eq!(std::fs::read(&path)?, b"{}");
+/// # std::fs::remove_file(&path)?;
+/// # Ok::<(), std::io::Error>(())
+/// ```
 ///
 /// # Errors
 /// Whatever `write` or the file system reports.
