@@ -28,7 +28,9 @@ from __future__ import annotations
 import dataclasses
 import enum
 import inspect
+import json
 import math
+import os
 from typing import (
     Any,
     Callable,
@@ -429,6 +431,8 @@ def minimize(
     parallel: Optional[bool] = None,
     record_x: Optional[bool] = None,
     final_evaluation: Optional[bool] = None,
+    checkpoint: Optional[Union[str, os.PathLike[str]]] = None,
+    checkpoint_every: Optional[int] = None,
 ) -> OptimizeResult:
     """Minimise ``fun`` from ``x0``: ``minimize(fun, x0, budget=...)`` is the first thing to try.
 
@@ -513,6 +517,18 @@ def minimize(
     final_evaluation : bool
         Evaluate ``fun`` once at the final ``x`` for ``result.fun`` (default). When False,
         ``result.fun`` is the last iteration's mean value.
+    checkpoint : str or path, optional
+        The paper's loop: a file that keeps the run's state (theta, Adam's moments, the
+        iteration, the random streams' position, the history so far and the settings), written
+        atomically (temporary file, fsync, rename) every ``checkpoint_every`` iterations, at
+        the end, and when ``fun`` or ``callback`` raises (``KeyboardInterrupt`` included). If
+        the file exists, the run continues from it: the result is bit for bit that of the run
+        never interrupted. A file of other settings, or a damaged one, is a ValueError naming
+        the path and the difference, and is not used. Not for ``method='adaptive'`` (its state
+        lives inside the Rust ``Minimizer``): a ValueError.
+    checkpoint_every : int, optional
+        Iterations between checkpoints; 0: only at the end and on an exception (default:
+        about every 30 seconds, from the measured time per iteration).
 
     Returns
     -------
@@ -549,7 +565,18 @@ def minimize(
         "final_evaluation": final_evaluation,
     }
     chosen = _choose_method(method, budget, sigma0, paper_only)
+    if checkpoint_every is not None and (
+        isinstance(checkpoint_every, bool)
+        or int(checkpoint_every) != checkpoint_every
+        or checkpoint_every < 0
+    ):
+        raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be a whole number >= 0")
     if chosen == "adaptive":
+        if checkpoint is not None:
+            raise ValueError(
+                "checkpoint: supported by the paper's loop (method='plateau', 'fd' or 'spsa'); "
+                "method='adaptive' keeps its state inside the Rust Minimizer"
+            )
         return _minimize_adaptive(
             fun,
             x0_array,
@@ -589,6 +616,34 @@ def minimize(
             f"method = {chosen!r} is not a method: use 'adaptive', 'plateau', 'fd' or 'spsa'"
         )
     iterations, annealer, adam = o.schedule(budget, per_iteration, bounds, x0_array.shape)
+    settings = None
+    if checkpoint is not None:
+        # What a continued run must share with the run it continues; compared key by key in
+        # alphabetical order (the schedule, whose repr holds sigma0 and iterations, after them).
+        settings = json.dumps(
+            _jsonable(
+                {
+                    "method": chosen,
+                    "x0": x0_array.ravel().tolist(),
+                    "shape": list(x0_array.shape),
+                    "samples": o.samples,
+                    "sampling": o.sampling,
+                    "antithetic": o.antithetic,
+                    "orthogonal": o.orthogonal,
+                    "seed": seed,
+                    "lr": o.lr,
+                    "schedule": repr(annealer),
+                    "sigma0": o.sigma0,
+                    "sigma_min": o.sigma_min,
+                    "iterations": iterations,
+                    "step": o.step,
+                    "batched": batched,
+                    "seeded": seeded,
+                    "record_x": o.record_x,
+                    "bounds": None if bounds is None else _parse_bounds(bounds, x0_array.shape),
+                }
+            )
+        )
 
     raw_callback = None
     if callback is not None:
@@ -618,6 +673,9 @@ def minimize(
         iterations=iterations,
         callback=raw_callback,
         record_x=o.record_x,
+        checkpoint=None if checkpoint is None else os.fspath(checkpoint),
+        checkpoint_every=checkpoint_every,
+        settings=settings,
     )
     final = None
     if o.final_evaluation:
@@ -879,3 +937,14 @@ def ask_tell(
         final_evaluation=o.final_evaluation,
     )
     return AskTell(raw, "plateau")
+
+
+def _jsonable(value: Any) -> Any:
+    """``value`` with tuples as lists and non-finite floats as their repr, for JSON."""
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return repr(value)
+    return value

@@ -222,6 +222,9 @@ def _minimize(
     iterations: int | None = None,
     callback: Any = None,
     record_x: bool = False,
+    checkpoint: str | None = None,
+    checkpoint_every: int | None = None,
+    settings: str | None = None,
 ) -> dict[str, Any]: ...
 def _minimize_adaptive(
     fun: Any,

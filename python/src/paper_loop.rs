@@ -3,7 +3,7 @@
 use super::*;
 
 /// Per-iteration records of a run.
-#[derive(Default)]
+#[derive(Default, Clone, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Record {
     pub(crate) sigma: Vec<f64>,
     pub(crate) grad_norm: Vec<f64>,
@@ -11,6 +11,161 @@ pub(crate) struct Record {
     pub(crate) nfev: Vec<u64>,
     pub(crate) x: Vec<f64>,
     pub(crate) stopped_by_callback: bool,
+}
+
+impl Record {
+    /// Keeps the first `iterations` entries (of `dim` coordinates each in `x`).
+    fn truncate(&mut self, iterations: usize, dim: usize) {
+        self.sigma.truncate(iterations);
+        self.grad_norm.truncate(iterations);
+        self.value.truncate(iterations);
+        self.nfev.truncate(iterations);
+        if !self.x.is_empty() {
+            self.x.truncate(iterations * dim);
+        }
+    }
+}
+
+/// The version of the checkpoint file's layout.
+const CHECKPOINT_FORMAT: u32 = 1;
+
+/// About every this many seconds a run with a checkpoint file writes it (by default).
+const CHECKPOINT_SECONDS: f64 = 30.0;
+
+/// The contents of a `minimize(..., checkpoint=path)` file.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct CheckpointFile {
+    /// [`CHECKPOINT_FORMAT`].
+    format: u32,
+    /// The library's version.
+    version: String,
+    /// The run's settings, as Python describes them (a JSON object): compared key by key.
+    settings: serde_json::Value,
+    /// The loop's state (theta, Adam's moments, the iteration, the streams, the history).
+    state: plateau::OptimizerState,
+    /// The per-iteration records `minimize` returns.
+    record: Record,
+}
+
+/// Where a run keeps its checkpoint, how often, and with which settings.
+pub(crate) struct Checkpointing {
+    path: std::path::PathBuf,
+    /// Every this many iterations; `None`: about every [`CHECKPOINT_SECONDS`]; `Some(0)`:
+    /// only at the end and when the run stops on an exception.
+    every: Option<usize>,
+    settings: serde_json::Value,
+}
+
+impl Checkpointing {
+    /// Reads the file, if it exists: a damaged one, or one of other settings, is a
+    /// ValueError naming the path and the difference (never half-used).
+    fn load(&self, dim: usize) -> PyResult<Option<(plateau::OptimizerState, Record)>> {
+        let path = self.path.display();
+        let bytes = match std::fs::read(&self.path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => {
+                return Err(PyValueError::new_err(format!(
+                    "checkpoint {path} cannot be read: {e}"
+                )))
+            }
+        };
+        let damaged =
+            |why: String| PyValueError::new_err(format!("checkpoint {path} is damaged: {why}"));
+        let file: CheckpointFile =
+            serde_json::from_slice(&bytes).map_err(|e| damaged(e.to_string()))?;
+        if file.format != CHECKPOINT_FORMAT {
+            return Err(PyValueError::new_err(format!(
+                "checkpoint {path} has format {}, this version reads {CHECKPOINT_FORMAT}",
+                file.format
+            )));
+        }
+        if file.version != env!("CARGO_PKG_VERSION") {
+            return Err(PyValueError::new_err(format!(
+                "checkpoint {path} was written by plateau {}, this is {}",
+                file.version,
+                env!("CARGO_PKG_VERSION")
+            )));
+        }
+        if let (serde_json::Value::Object(found), serde_json::Value::Object(here)) =
+            (&file.settings, &self.settings)
+        {
+            for (key, value) in here {
+                let old = found.get(key).unwrap_or(&serde_json::Value::Null);
+                if old != value {
+                    return Err(PyValueError::new_err(format!(
+                        "checkpoint: {key} is {old} in {path}, {value} here"
+                    )));
+                }
+            }
+        }
+        file.state.validate().map_err(|e| damaged(e.to_string()))?;
+        let n = file.state.iteration;
+        let r = &file.record;
+        let lengths = [
+            r.sigma.len(),
+            r.grad_norm.len(),
+            r.value.len(),
+            r.nfev.len(),
+        ];
+        if file.state.theta.len() != dim
+            || lengths.iter().any(|&l| l != n)
+            || !(r.x.is_empty() || r.x.len() == n * dim)
+        {
+            return Err(damaged(format!(
+                "its records do not fit {n} iterations of dimension {dim}"
+            )));
+        }
+        Ok(Some((file.state, file.record)))
+    }
+
+    /// Writes the file atomically: a temporary file in the same directory, fsync, rename,
+    /// fsync of the directory.
+    fn save(&self, state: &plateau::OptimizerState, record: &Record) -> PyResult<()> {
+        let file = CheckpointFile {
+            format: CHECKPOINT_FORMAT,
+            version: env!("CARGO_PKG_VERSION").into(),
+            settings: self.settings.clone(),
+            state: state.clone(),
+            record: record.clone(),
+        };
+        let bytes = serde_json::to_vec(&file).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        replace_file(&self.path, &bytes).map_err(|e| {
+            pyo3::exceptions::PyOSError::new_err(format!(
+                "checkpoint {} not written: {e}",
+                self.path.display()
+            ))
+        })
+    }
+}
+
+/// Replaces `path` by `bytes` atomically; on error `path` is as before and no temporary
+/// file is left.
+fn replace_file(path: &std::path::Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => std::path::Path::new("."),
+    };
+    let name = path
+        .file_name()
+        .map_or_else(|| "checkpoint".into(), |n| n.to_string_lossy().into_owned());
+    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
+    let result = (|| {
+        let mut file = std::fs::File::create(&tmp)?;
+        file.write_all(bytes)?;
+        file.sync_all()?;
+        drop(file);
+        std::fs::rename(&tmp, path)?;
+        if let Ok(d) = std::fs::File::open(dir) {
+            let _ = d.sync_all();
+        }
+        Ok(())
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -23,67 +178,134 @@ pub(crate) fn run<G: GradientEstimator + Send + ?Sized>(
     mut optimizer: Optimizer,
     callback: Option<&Py<PyAny>>,
     record_x: bool,
+    checkpoint: Option<&Checkpointing>,
 ) -> PyResult<(Vec<f64>, usize, usize, Record)> {
     shared.set_shape(shape);
-    let mut record = Record::default();
-    let callback_error: Mutex<Option<PyErr>> = Mutex::new(None);
-    let result = py.detach(|| {
-        let mut nfev = 0u64;
-        optimizer.minimize_with(estimator, theta, |step| {
-            let g = &step.estimate.gradient;
-            nfev += step.estimate.evaluations as u64;
-            record.sigma.push(step.sigma);
-            record
-                .grad_norm
-                .push(g.iter().map(|v| v * v).sum::<f64>().sqrt());
-            record.value.push(step.estimate.mean_value);
-            record.nfev.push(nfev);
-            if record_x {
-                record.x.extend_from_slice(step.theta);
+    let dim = theta.len();
+    let loaded = match checkpoint {
+        Some(c) => c.load(dim)?,
+        None => None,
+    };
+    let (mut state, mut record) = match loaded {
+        Some(loaded) => loaded,
+        None => (
+            plateau::OptimizerState::new(theta).map_err(value_error)?,
+            Record::default(),
+        ),
+    };
+    let save = |state: &plateau::OptimizerState, record: &Record| match checkpoint {
+        Some(c) => c.save(state, record),
+        None => Ok(()),
+    };
+    let started = std::time::Instant::now();
+    let first_iteration = state.iteration;
+    loop {
+        // When the next checkpoint is due (iterations done), from the cadence and the cost.
+        let done = state.iteration;
+        let due = checkpoint.and_then(|c| match c.every {
+            Some(0) => None,
+            Some(k) => Some(done + k),
+            None => {
+                let ran = done - first_iteration;
+                let per = started.elapsed().as_secs_f64() / ran.max(1) as f64;
+                let k = if ran == 0 || per <= 0.0 {
+                    1
+                } else {
+                    ((CHECKPOINT_SECONDS / per) as usize).max(1)
+                };
+                Some(done + k)
             }
-            Python::attach(|py| {
-                let outcome = (|| -> PyResult<bool> {
-                    py.check_signals()?;
-                    let Some(callback) = callback else {
-                        return Ok(false);
-                    };
-                    let x = array_like(py, step.theta.to_vec(), shape)?;
-                    let grad = array_like(py, g.clone(), shape)?;
-                    let stop = callback.bind(py).call1((
-                        step.iteration,
-                        x,
-                        step.sigma,
-                        step.estimate.mean_value,
-                        grad,
-                        nfev,
-                    ))?;
-                    stop.is_truthy()
-                })();
-                match outcome {
-                    Ok(true) => {
-                        record.stopped_by_callback = true;
-                        ControlFlow::Break(())
-                    }
-                    Ok(false) => ControlFlow::Continue(()),
-                    Err(e) => {
-                        *callback_error.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
-                        ControlFlow::Break(())
-                    }
+        });
+        let mut checkpoint_due = false;
+        let callback_error: Mutex<Option<PyErr>> = Mutex::new(None);
+        let mut nfev = record.nfev.last().copied().unwrap_or(0);
+        let result = py.detach(|| {
+            optimizer.minimize_from(estimator, state, |step| {
+                let g = &step.estimate.gradient;
+                nfev += step.estimate.evaluations as u64;
+                record.sigma.push(step.sigma);
+                record
+                    .grad_norm
+                    .push(g.iter().map(|v| v * v).sum::<f64>().sqrt());
+                record.value.push(step.estimate.mean_value);
+                record.nfev.push(nfev);
+                if record_x {
+                    record.x.extend_from_slice(step.theta);
                 }
+                let flow = Python::attach(|py| {
+                    let outcome = (|| -> PyResult<bool> {
+                        py.check_signals()?;
+                        let Some(callback) = callback else {
+                            return Ok(false);
+                        };
+                        let x = array_like(py, step.theta.to_vec(), shape)?;
+                        let grad = array_like(py, g.clone(), shape)?;
+                        let stop = callback.bind(py).call1((
+                            step.iteration,
+                            x,
+                            step.sigma,
+                            step.estimate.mean_value,
+                            grad,
+                            nfev,
+                        ))?;
+                        stop.is_truthy()
+                    })();
+                    match outcome {
+                        Ok(true) => {
+                            record.stopped_by_callback = true;
+                            ControlFlow::Break(())
+                        }
+                        Ok(false) => ControlFlow::Continue(()),
+                        Err(e) => {
+                            *callback_error.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+                            ControlFlow::Break(())
+                        }
+                    }
+                });
+                if flow.is_continue() && due.is_some_and(|k| step.iteration + 1 >= k) {
+                    checkpoint_due = true;
+                    return ControlFlow::Break(());
+                }
+                flow
             })
-        })
-    });
-    if let Some(err) = callback_error
-        .into_inner()
-        .unwrap_or_else(|p| p.into_inner())
-    {
-        return Err(err);
+        });
+        let callback_error = callback_error
+            .into_inner()
+            .unwrap_or_else(|p| p.into_inner());
+        state = match result {
+            Ok(state) => state,
+            Err(run_error) => {
+                // `fun` raised (KeyboardInterrupt included) or a value was bad: the state
+                // after the last good iteration is kept, to continue from.
+                let state = *run_error.state;
+                record.truncate(state.iteration, dim);
+                save(&state, &record)?;
+                return match shared.finish(Err::<(), _>(run_error.error)) {
+                    Err(e) => Err(e),
+                    Ok(()) => Err(PyValueError::new_err("the run failed")),
+                };
+            }
+        };
+        if let Some(err) = callback_error {
+            save(&state, &record)?;
+            return Err(err);
+        }
+        if checkpoint_due && !record.stopped_by_callback {
+            save(&state, &record)?;
+            continue;
+        }
+        break;
     }
-    let history = shared.finish(result)?;
-    let x = history
-        .last_theta()
-        .map(<[f64]>::to_vec)
-        .unwrap_or_else(|| theta.to_vec());
+    save(&state, &record)?;
+    let history = shared.finish(Ok(state.history))?;
+    let x = if history.theta.is_empty() {
+        state.theta
+    } else {
+        history
+            .last_theta()
+            .map(<[f64]>::to_vec)
+            .unwrap_or(state.theta)
+    };
     Ok((x, history.iterations(), history.evaluations, record))
 }
 
@@ -92,7 +314,7 @@ pub(crate) fn run<G: GradientEstimator + Send + ?Sized>(
 /// gradient, nfev)` runs after every iteration; a truthy return stops the run. Returns a dict
 /// of raw results that `plateau.minimize` turns into an `OptimizeResult`.
 #[pyfunction]
-#[pyo3(signature = (estimator, x0, adam, annealer, iterations=None, callback=None, record_x=false))]
+#[pyo3(signature = (estimator, x0, adam, annealer, iterations=None, callback=None, record_x=false, checkpoint=None, checkpoint_every=None, settings=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn _minimize<'py>(
     py: Python<'py>,
@@ -103,8 +325,20 @@ pub(crate) fn _minimize<'py>(
     iterations: Option<usize>,
     callback: Option<Py<PyAny>>,
     record_x: bool,
+    checkpoint: Option<std::path::PathBuf>,
+    checkpoint_every: Option<usize>,
+    settings: Option<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (theta, shape) = to_vector(py, x0, "x0")?;
+    let checkpointing = match checkpoint {
+        Some(path) => Some(Checkpointing {
+            path,
+            every: checkpoint_every,
+            settings: serde_json::from_str(settings.as_deref().unwrap_or("{}"))
+                .map_err(|e| PyValueError::new_err(format!("settings: {e}")))?,
+        }),
+        None => None,
+    };
     let mut optimizer = Optimizer::new(adam.inner.clone(), annealer.inner).record_theta(false);
     if let Some(iterations) = iterations {
         optimizer = optimizer.iterations(iterations);
@@ -117,7 +351,7 @@ pub(crate) fn _minimize<'py>(
             $(if let Ok(est) = estimator.cast::<$class>() {
                 let mut est = est.try_borrow_mut()?;
                 let est = &mut *est;
-                run(py, &mut est.inner, &est.shared, &theta, &shape, optimizer, callback, record_x)?
+                run(py, &mut est.inner, &est.shared, &theta, &shape, optimizer, callback, record_x, checkpointing.as_ref())?
             } else)+ {
                 return Err(PyTypeError::new_err(format!(
                     "estimator must be a PlateauFreeGradient, FiniteDifference or Spsa, got {}",

@@ -64,3 +64,337 @@ fn help_exits_0() {
     assert_eq!(output.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&output.stdout).contains("[default: the task's]"));
 }
+
+/// The binary's files in `dir` that must be equal between a run left alone and a run
+/// interrupted and resumed: history.csv without its `seconds` column, summary.json without
+/// its timings, and the final image (PNG and EXR).
+fn results(dir: &std::path::Path) -> (String, String, Vec<u8>, Vec<u8>) {
+    let read = |name: &str| std::fs::read(dir.join(name)).unwrap_or_default();
+    let history = String::from_utf8_lossy(&read("history.csv"))
+        .lines()
+        .map(|l| {
+            l.rsplit_once(',')
+                .map_or(l, |(rest, _seconds)| rest)
+                .to_string()
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let summary = String::from_utf8_lossy(&read("summary.json"))
+        .lines()
+        .filter(|l| !l.contains("seconds"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    (history, summary, read("final.png"), read("final.exr"))
+}
+
+/// Runs the binary to its end; returns the exit code and stderr.
+fn run_in(args: &[String]) -> (Option<i32>, String) {
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    run(&args)
+}
+
+/// A run stopped after k iterations (the Ctrl-C path, through the hidden `--stop-after`)
+/// exits 130 with its outputs written and marked interrupted, prints the command that
+/// resumes; continued with `--resume`, it ends bit-identical to the run left alone: for the
+/// paper's loop with each renderer-seed rule, finite differences, and the adaptive search.
+#[test]
+fn an_interrupted_run_resumed_equals_the_run_left_alone() {
+    for (tag, extra) in [
+        ("fixed", &["--iterations", "12"][..]),
+        ("pair", &["--iterations", "12", "--crn", "pair"][..]),
+        ("fd", &["--iterations", "6", "--method", "fd"][..]),
+        (
+            "adaptive",
+            &[
+                "--iterations",
+                "60",
+                "--method",
+                "adaptive",
+                "--crn",
+                "pair",
+            ][..],
+        ),
+    ] {
+        let base: Vec<String> = ["optimize", "shadow", "--scale", "0.125", "--spp", "2"]
+            .iter()
+            .chain(extra)
+            .chain(&["--eval-every", "2", "--quiet"])
+            .map(|s| s.to_string())
+            .collect();
+        let alone = fresh(&format!("alone-{tag}"));
+        let cut = fresh(&format!("cut-{tag}"));
+        let with = |more: &[&str]| {
+            let mut v = base.clone();
+            v.extend(more.iter().map(|s| s.to_string()));
+            v
+        };
+        let (code, err) = run_in(&with(&["--out", &alone.display().to_string()]));
+        assert_eq!(code, Some(0), "{tag}: {err}");
+        let (code, err) = run_in(&with(&[
+            "--out",
+            &cut.display().to_string(),
+            "--stop-after",
+            "3",
+            "--checkpoint-every",
+            "2",
+        ]));
+        assert_eq!(code, Some(130), "{tag}: {err}");
+        assert!(
+            err.contains(&format!("--resume {}", cut.display())),
+            "{tag}: no resume command in {err}"
+        );
+        let summary = std::fs::read_to_string(cut.join("summary.json")).unwrap();
+        assert!(summary.contains("\"interrupted\": true"), "{tag}");
+        for file in ["history.csv", "final.png", "final.exr", "checkpoint.json"] {
+            assert!(cut.join(file).is_file(), "{tag}: no {file}");
+        }
+        assert_eq!(
+            std::fs::read_to_string(cut.join("history.csv"))
+                .unwrap()
+                .lines()
+                .count(),
+            4,
+            "{tag}: three iterations and the header"
+        );
+        let (code, err) = run_in(&with(&["--resume", &cut.display().to_string()]));
+        assert_eq!(code, Some(0), "{tag}: {err}");
+        let (a, b) = (results(&alone), results(&cut));
+        assert_eq!(a.0, b.0, "{tag}: history.csv differs");
+        assert_eq!(a.1, b.1, "{tag}: summary.json differs");
+        assert!(a.2 == b.2 && a.3 == b.3, "{tag}: the final image differs");
+        assert!(b.1.contains("\"interrupted\": false"), "{tag}");
+        let _ = std::fs::remove_dir_all(&alone);
+        let _ = std::fs::remove_dir_all(&cut);
+    }
+}
+
+/// `--resume` of a missing, damaged, foreign or mismatched checkpoint exits 2 within a
+/// second, on one line naming `--resume`, the file and what is wrong, and writes nothing.
+#[test]
+fn bad_checkpoints_are_refused_before_any_work() {
+    let dir = fresh("refuse");
+    let d = dir.display().to_string();
+    let small = [
+        "--scale",
+        "0.125",
+        "--spp",
+        "2",
+        "--iterations",
+        "4",
+        "--quiet",
+    ];
+    let mut args = vec!["optimize", "shadow", "--out", &d, "--checkpoint-every", "0"];
+    args.extend(small);
+    assert_eq!(run(&args).0, Some(0));
+    let good = std::fs::read_to_string(dir.join("checkpoint.json")).unwrap();
+    let listing = |d: &std::path::Path| {
+        let mut names: Vec<_> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        names.sort();
+        names
+    };
+    let before = listing(&dir);
+    let missing = fresh("refuse-missing").display().to_string();
+    let cases: Vec<(String, Vec<&str>, &str)> = vec![
+        (good.clone(), vec!["--resume", &missing], "checkpoint.json"),
+        (good[..good.len() / 2].into(), vec![], "is damaged"),
+        ("not json".into(), vec![], "is damaged"),
+        (
+            good.replacen("\"format\":1", "\"format\":7", 1),
+            vec![],
+            "format 7",
+        ),
+        (
+            good.replacen("\"executable\":\"", "\"executable\":\"0", 1),
+            vec![],
+            "another build",
+        ),
+        (good.clone(), vec!["--crn", "pair"], "crn is fixed in"),
+        (good.clone(), vec!["--no-anneal"], "anneal is true in"),
+        (good.clone(), vec!["--seed", "3"], "seed is 0 in"),
+        (good.clone(), vec!["--method", "fd"], "method is plateau in"),
+        (
+            good.replacen("\"iteration\":4", "\"iteration\":3", 1),
+            vec![],
+            "inconsistent",
+        ),
+    ];
+    for (contents, more, expected) in cases {
+        std::fs::write(dir.join("checkpoint.json"), &contents).unwrap();
+        let mut args = vec!["optimize", "shadow"];
+        args.extend(small);
+        args.extend(&more);
+        if !more.contains(&"--resume") {
+            args.extend(["--resume", &d]);
+        }
+        let t = std::time::Instant::now();
+        let (code, err) = run(&args);
+        let seconds = t.elapsed().as_secs_f64();
+        assert_eq!(code, Some(2), "{expected}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{expected}: {err}");
+        assert!(
+            err.contains("--resume") && err.contains(expected),
+            "{expected}: {err}"
+        );
+        assert!(seconds < 1.0, "{expected}: {seconds} s");
+        assert_eq!(listing(&dir), before, "{expected}: files changed");
+        assert!(!std::path::Path::new(&missing).exists());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Sends SIGINT to a child process (the `kill` command: no dependency for a test).
+fn interrupt(child: &std::process::Child) {
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(status.success());
+}
+
+/// Waits (up to a minute) until `path` exists.
+fn wait_for(path: &std::path::Path) {
+    let t = std::time::Instant::now();
+    while !path.exists() {
+        assert!(
+            t.elapsed().as_secs() < 60,
+            "{} never appeared",
+            path.display()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+}
+
+/// A real Ctrl-C (SIGINT) after the first iteration: the run finishes its iteration,
+/// writes the checkpoint and every output (summary marked interrupted), prints the command
+/// that resumes and exits 130; `--resume` then ends as the run left alone.
+#[test]
+fn ctrl_c_writes_everything_exits_130_and_resumes_bit_identical() {
+    let alone = fresh("sigint-alone");
+    let cut = fresh("sigint-cut");
+    let base = [
+        "optimize",
+        "shadow",
+        "--scale",
+        "0.25",
+        "--spp",
+        "8",
+        "--iterations",
+        "300",
+        "--eval-every",
+        "10",
+        "--quiet",
+    ];
+    let mut child = Command::new(env!("CARGO_BIN_EXE_pathtracer"))
+        .args(base)
+        .args([
+            "--out",
+            &cut.display().to_string(),
+            "--checkpoint-every",
+            "1",
+        ])
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("the binary runs");
+    // The first checkpoint is written after the first iteration.
+    wait_for(&cut.join("checkpoint.json"));
+    interrupt(&child);
+    let status = child.wait().expect("the run ends");
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut stderr).unwrap();
+    assert_eq!(status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("--resume"), "{stderr}");
+    let summary = std::fs::read_to_string(cut.join("summary.json")).unwrap();
+    assert!(summary.contains("\"interrupted\": true"), "{summary}");
+    let rows = std::fs::read_to_string(cut.join("history.csv"))
+        .unwrap()
+        .lines()
+        .count()
+        - 1;
+    assert!((1..300).contains(&rows), "{rows} iterations done");
+    for file in ["final.png", "final.exr", "progress.png", "convergence.png"] {
+        assert!(cut.join(file).is_file(), "no {file}");
+    }
+
+    let mut resume: Vec<&str> = base.to_vec();
+    let cut_arg = cut.display().to_string();
+    resume.extend(["--resume", &cut_arg]);
+    let (code, err) = run(&resume);
+    assert_eq!(code, Some(0), "{err}");
+    let mut whole: Vec<&str> = base.to_vec();
+    let alone_arg = alone.display().to_string();
+    whole.extend(["--out", &alone_arg]);
+    assert_eq!(run(&whole).0, Some(0));
+    let (a, b) = (results(&alone), results(&cut));
+    assert_eq!(a.0, b.0, "history.csv differs");
+    assert_eq!(a.1, b.1, "summary.json differs");
+    assert!(a.2 == b.2 && a.3 == b.3, "the final image differs");
+    let _ = std::fs::remove_dir_all(&alone);
+    let _ = std::fs::remove_dir_all(&cut);
+}
+
+/// A second Ctrl-C exits at once (130), without waiting for the iteration or writing the
+/// outputs; the last checkpoint stays whole and resumable.
+#[test]
+fn a_second_ctrl_c_exits_at_once() {
+    let dir = fresh("sigint-twice");
+    // Slow iterations (two full-resolution renders at 64 spp, about a second each).
+    let mut child = Command::new(env!("CARGO_BIN_EXE_pathtracer"))
+        .args([
+            "optimize",
+            "shadow",
+            "--spp",
+            "64",
+            "--iterations",
+            "50",
+            "--quiet",
+            "--checkpoint-every",
+            "1",
+            "--out",
+        ])
+        .arg(&dir)
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("the binary runs");
+    wait_for(&dir.join("checkpoint.json"));
+    interrupt(&child);
+    std::thread::sleep(std::time::Duration::from_millis(50));
+    interrupt(&child);
+    let status = child.wait().expect("the run ends");
+    assert_eq!(status.code(), Some(130));
+    assert!(!dir.join("summary.json").exists(), "outputs were written");
+    let checkpoint = std::fs::read_to_string(dir.join("checkpoint.json")).unwrap();
+    assert!(checkpoint.ends_with('}'), "the checkpoint is whole");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Combinations that cannot run are refused before any work, like a bad value: exit 2, one
+/// line naming the arguments, no files.
+#[test]
+fn impossible_combinations_exit_2_before_any_work() {
+    let out = fresh("combination");
+    let o = out.display().to_string();
+    for (args, named) in [
+        (
+            vec![
+                "optimize", "shadow", "--method", "adaptive", "--budget", "5", "--out", &o,
+            ],
+            "--budget",
+        ),
+        (
+            vec!["optimize", "shadow", "--out", &o, "--resume", &o],
+            "--resume",
+        ),
+    ] {
+        let t = std::time::Instant::now();
+        let (code, stderr) = run(&args);
+        assert_eq!(code, Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(named), "{stderr}");
+        assert!(t.elapsed().as_secs_f64() < 1.0);
+        assert!(!out.exists());
+    }
+}

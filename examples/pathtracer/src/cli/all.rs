@@ -5,8 +5,9 @@ use std::path::{Path, PathBuf};
 
 use super::{summarize, values, with_threads};
 use crate::report::Result;
-use crate::run::{self, Method, Settings};
-use crate::tasks;
+use crate::run::interrupt::Interrupted;
+use crate::run::{self, checkpoint, Control, Earlier, Every, Method, Settings};
+use crate::tasks::{self, Task};
 
 /// The options of `all`.
 #[derive(clap::Args)]
@@ -35,6 +36,10 @@ pub(super) struct Args {
     /// Worker threads for rendering [default: all cores].
     #[arg(long, allow_negative_numbers = true, value_parser = values::at_least(1usize))]
     threads: Option<usize>,
+    /// Testing: stop each run as Ctrl-C does once this many iterations are done [default:
+    /// never].
+    #[arg(long, hide = true, value_name = "N", allow_negative_numbers = true, value_parser = values::at_least(1usize))]
+    stop_after: Option<usize>,
 }
 
 /// Runs every task (or those of `--tasks`), rewriting `results.md` after each.
@@ -47,8 +52,76 @@ pub(super) fn run(args: Args) -> Result<()> {
             args.seeds,
             args.method.unwrap_or(Method::Plateau),
             !args.no_baseline,
+            &Limits {
+                stop_after: args.stop_after,
+                shrink: None,
+            },
         )
     })
+}
+
+/// What a test changes of `all`: when to stop each run, and a change of every run's
+/// settings (to make them small).
+struct Limits {
+    stop_after: Option<usize>,
+    shrink: Option<fn(&mut Settings)>,
+}
+
+/// Runs `task` with `s` into `dir`, unless `dir` holds the finished run of these settings
+/// (kept); continues it if `dir` holds its unfinished run. An interrupted run returns
+/// [`Interrupted`] (the command line then exits 130; the same command continues).
+fn run_in(task: &Task, s: &Settings, dir: &Path, limits: &Limits) -> Result<()> {
+    let path = dir.join(checkpoint::FILE);
+    let resume = match Earlier::at(&path, task, s) {
+        Earlier::Finished(c) if summary_complete(dir) => {
+            eprintln!(
+                "{}: kept (finished, {} iterations)",
+                dir.display(),
+                c.history.len()
+            );
+            return Ok(());
+        }
+        Earlier::Finished(c) | Earlier::Unfinished(c) => {
+            eprintln!(
+                "{}: resuming from iteration {}",
+                dir.display(),
+                c.history.len()
+            );
+            Some(*c)
+        }
+        Earlier::None(None) => None,
+        Earlier::None(Some(why)) => {
+            eprintln!("{}: starting over ({why})", dir.display());
+            None
+        }
+    };
+    let settings = resume
+        .as_ref()
+        .map_or_else(|| s.clone(), |c| c.settings.clone());
+    let control = Control {
+        out: Some(dir),
+        checkpoint: Some(path),
+        every: Every::Auto,
+        resume,
+        requested: Some(s.clone()),
+        stop_after: limits.stop_after,
+        progress: limits.shrink.is_none(),
+    };
+    let outcome = run::optimize_with(task, &settings, control)?;
+    if outcome.summary.interrupted {
+        return Err(Box::new(Interrupted {
+            resume: String::new(),
+        }));
+    }
+    Ok(())
+}
+
+/// Whether `dir` holds the summary of a run that was not interrupted.
+fn summary_complete(dir: &Path) -> bool {
+    std::fs::read(dir.join("summary.json"))
+        .ok()
+        .and_then(|b| serde_json::from_slice::<run::Summary>(&b).ok())
+        .is_some_and(|s| !s.interrupted)
 }
 
 /// Every task with the plateau-free gradient and, where it is affordable, the finite-difference
@@ -60,6 +133,7 @@ fn all(
     seeds: u64,
     method: Method,
     baseline: bool,
+    limits: &Limits,
 ) -> Result<()> {
     let command = format!(
         "cargo run --release -p pathtracer -- all{}{}{}{}{} --out {}",
@@ -88,7 +162,9 @@ fn all(
             plateau.eval_every = run::eval_every(plateau.iterations, 20);
             plateau.scale = Some(0.5);
         }
-        let mut ours = Vec::new();
+        if let Some(shrink) = limits.shrink {
+            shrink(&mut plateau);
+        }
         for seed in 0..seeds {
             let mut s = plateau.clone();
             s.seed = seed;
@@ -96,7 +172,7 @@ fn all(
                 0 => out.join(task.name()),
                 k => out.join(format!("{}-seed{k}", task.name())),
             };
-            ours.push(run::optimize(&task, &s, Some(&dir), true)?);
+            run_in(&task, &s, &dir, limits)?;
         }
         // Central differences cost 2n renders per iteration: affordable for the
         // low-dimensional tasks only (SORT would need 300 renders an iteration).
@@ -106,16 +182,102 @@ fn all(
                 ..plateau.clone()
             };
             fd.method = Method::Fd;
-            run::optimize(
-                &task,
-                &fd,
-                Some(&out.join(format!("{}-fd", task.name()))),
-                true,
-            )?;
+            run_in(&task, &fd, &out.join(format!("{}-fd", task.name())), limits)?;
         }
         // Rewritten after every task, so that an interrupted run still leaves its table.
         summarize::write_results(out, &command)?;
     }
     println!("wrote {}", out.join("results.md").display());
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `history.csv` without its seconds, the summary's numbers without timings, the final
+    /// image: what a resumed run must reproduce.
+    fn results(dir: &Path) -> (String, String, Vec<u8>) {
+        let history = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+        let history = history
+            .lines()
+            .map(|l| l.rsplit_once(',').map_or(l, |(a, _)| a).to_string())
+            .collect::<Vec<_>>()
+            .join("\n");
+        let summary = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+        let summary = summary
+            .lines()
+            .filter(|l| !l.contains("seconds"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        (
+            history,
+            summary,
+            std::fs::read(dir.join("final.exr")).unwrap(),
+        )
+    }
+
+    /// Interrupted mid-way, `all` keeps its finished runs (not run again: their files are
+    /// untouched) and continues the interrupted one; everything ends as in an `all` left
+    /// alone.
+    #[test]
+    fn all_keeps_finished_runs_and_resumes_the_rest() {
+        fn small(s: &mut Settings) {
+            s.iterations = 8;
+            s.eval_every = 2;
+            s.spp = 2;
+            s.scale = Some(0.125);
+        }
+        let root = std::env::temp_dir().join(format!("plateau-all-resume-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let only = ["shadow".to_string()];
+        let go = |out: &Path, seeds: u64, stop_after: Option<usize>| {
+            let limits = Limits {
+                stop_after,
+                shrink: Some(small),
+            };
+            all(
+                out,
+                false,
+                Some(&only),
+                seeds,
+                Method::Plateau,
+                true,
+                &limits,
+            )
+        };
+        let alone = root.join("alone");
+        go(&alone, 2, None).unwrap();
+
+        let cut = root.join("cut");
+        go(&cut, 1, None).unwrap(); // seed 0 and the baseline finish
+        let first = std::fs::read(cut.join("shadow/summary.json")).unwrap();
+        let fd = std::fs::read(cut.join("shadow-fd/summary.json")).unwrap();
+        let err = go(&cut, 2, Some(3)).unwrap_err(); // seed 1 is interrupted
+        assert!(err.is::<Interrupted>(), "{err}");
+        assert_eq!(
+            std::fs::read(cut.join("shadow/summary.json")).unwrap(),
+            first
+        );
+        let seed1 = std::fs::read_to_string(cut.join("shadow-seed1/summary.json")).unwrap();
+        assert!(seed1.contains("\"interrupted\": true"));
+        go(&cut, 2, None).unwrap();
+        // Kept, not run again (a new run would have new timings).
+        assert_eq!(
+            std::fs::read(cut.join("shadow/summary.json")).unwrap(),
+            first
+        );
+        assert_eq!(
+            std::fs::read(cut.join("shadow-fd/summary.json")).unwrap(),
+            fd
+        );
+        for run in ["shadow", "shadow-seed1", "shadow-fd"] {
+            assert_eq!(
+                results(&alone.join(run)),
+                results(&cut.join(run)),
+                "{run} differs"
+            );
+        }
+        let _ = std::fs::remove_dir_all(&root);
+    }
 }

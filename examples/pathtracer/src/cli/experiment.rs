@@ -42,6 +42,7 @@ pub(super) fn run(args: Args) -> Result<()> {
         tasks: args.tasks,
         seeds: args.seeds,
         reuse_runs: args.reuse_runs,
+        stop_after: None,
     };
     with_threads(args.threads, || experiments::run(args.name, &opts))
 }

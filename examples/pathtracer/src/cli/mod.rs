@@ -17,6 +17,7 @@ use std::time::Instant;
 use clap::{Parser, Subcommand};
 
 use crate::report::Result;
+use crate::run::interrupt::{self, Interrupted};
 use crate::tasks::{self, Task, View};
 
 #[derive(Parser)]
@@ -100,9 +101,63 @@ pub fn main() {
         }
     };
     if let Err(e) = run_cli(cli) {
+        if let Some(stop) = e.downcast_ref::<Interrupted>() {
+            let resume = if stop.resume.is_empty() {
+                // `all` and the experiments: the same command keeps the finished runs and
+                // continues the others.
+                command_line(&[], None)
+            } else {
+                stop.resume.clone()
+            };
+            eprintln!("interrupted; to continue: {resume}");
+            std::process::exit(interrupt::EXIT_CODE);
+        }
         eprintln!("error: {e}");
         std::process::exit(if e.is::<Usage>() { 2 } else { 1 });
     }
+}
+
+/// The command that continues an interrupted `optimize` whose files are in `dir`: this
+/// command line with `--resume dir` instead of `--out`.
+fn resume_command(dir: &std::path::Path) -> String {
+    command_line(&["--out", "--resume"], Some(dir))
+}
+
+/// This process's command line, without the options `drop` (and their values) and the
+/// testing option `--stop-after`, with `--resume dir` added if given; quoted for a POSIX
+/// shell.
+fn command_line(drop: &[&str], resume: Option<&std::path::Path>) -> String {
+    let mut args: Vec<String> = Vec::new();
+    let mut skip_value = false;
+    for arg in std::env::args() {
+        if skip_value {
+            skip_value = false;
+            continue;
+        }
+        let name = arg.split('=').next().unwrap_or("");
+        if drop.contains(&name) || name == "--stop-after" {
+            skip_value = !arg.contains('=');
+            continue;
+        }
+        args.push(arg);
+    }
+    if let Some(dir) = resume {
+        args.push("--resume".into());
+        args.push(dir.display().to_string());
+    }
+    args.iter()
+        .map(|a| {
+            if !a.is_empty()
+                && a.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || "-_./=,:+@".contains(c))
+            {
+                a.clone()
+            } else {
+                format!("'{}'", a.replace('\'', "'\\''"))
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// clap's message without its blank lines, usage and tips, as one line.

@@ -2,11 +2,12 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{find_task, usage, values, with_threads, RenderOptions};
+use super::{find_task, resume_command, usage, values, with_threads, RenderOptions};
 use crate::report::Result;
 use plateau::Sampling;
 
-use crate::run::{self, Crn, Method, Settings};
+use crate::run::interrupt::{self, Interrupted};
+use crate::run::{self, Checkpoint, CheckpointError, Control, Crn, Every, Method, Settings};
 use crate::tasks::Task;
 
 /// The options of `optimize`.
@@ -18,8 +19,20 @@ pub(super) struct Args {
     #[command(flatten)]
     opts: RunOptions,
     /// Output directory [default: out/<task>].
-    #[arg(long, value_parser = values::out_dir)]
+    #[arg(long, value_parser = values::out_dir, conflicts_with = "resume")]
     out: Option<PathBuf>,
+    /// Continue the interrupted run in this directory (its checkpoint.json), writing there;
+    /// the other options must be those of that run (a difference is refused, named)
+    /// [default: a new run].
+    #[arg(long, value_name = "DIR", value_parser = values::run_dir)]
+    resume: Option<PathBuf>,
+    /// Write the checkpoint every this many iterations; 0: only at the end and on Ctrl-C
+    /// [default: about every 30 s, from the measured time per iteration].
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = values::at_least(0usize))]
+    checkpoint_every: Option<usize>,
+    /// Testing: stop as Ctrl-C does once this many iterations are done [default: never].
+    #[arg(long, hide = true, value_name = "N", allow_negative_numbers = true, value_parser = values::at_least(1usize))]
+    stop_after: Option<usize>,
 }
 
 /// Overrides of a task's defaults (supplemental Table 1).
@@ -103,8 +116,17 @@ impl RunOptions {
 }
 
 /// Runs `optimize` and prints one line: the errors before and after, the time, the outputs.
+/// With `--resume`, the checkpoint is read and checked before any work; a bad one is refused
+/// with one line and exit code 2. Interrupted (Ctrl-C), it prints the command that continues.
 pub(super) fn run(args: Args) -> Result<()> {
-    let Args { task, opts, out } = args;
+    let Args {
+        task,
+        opts,
+        out,
+        resume,
+        checkpoint_every,
+        stop_after,
+    } = args;
     let task = find_task(&task)?;
     let samples = opts.samples.unwrap_or(task.defaults().samples);
     let plateau = opts.method.unwrap_or(Method::Plateau) == Method::Plateau;
@@ -118,18 +140,56 @@ pub(super) fn run(args: Args) -> Result<()> {
             "--budget with --method adaptive: the time budget applies to the paper's loop only; allowed: drop --budget, or another --method".into(),
         ));
     }
-    with_threads(opts.render.threads, || {
-        let mut settings = opts.settings(&task);
-        if let Some(budget) = opts.budget {
-            let (plan, why) = run::plan_for_budget(&task, &settings, budget);
-            eprintln!("{why}");
-            settings = plan;
+    let requested = opts.settings(&task);
+    let checkpoint = match &resume {
+        Some(dir) => {
+            let path = dir.join(run::checkpoint::FILE);
+            let refused = |e: CheckpointError| usage(format!("--resume {}: {e}", dir.display()));
+            let c = Checkpoint::load(&path).map_err(refused)?;
+            c.check_matches(&task, &requested, &path).map_err(refused)?;
+            Some(c)
         }
-        let dir = out.unwrap_or_else(|| Path::new("out").join(task.name()));
-        let outcome = run::optimize(&task, &settings, Some(&dir), !opts.quiet)?;
+        None => None,
+    };
+    let dir = resume
+        .clone()
+        .or(out)
+        .unwrap_or_else(|| Path::new("out").join(task.name()));
+    interrupt::install_handler();
+    with_threads(opts.render.threads, || {
+        let settings = match &checkpoint {
+            // The run's own settings (a budget's plan is not made again).
+            Some(c) => c.settings.clone(),
+            None => match opts.budget {
+                Some(budget) => {
+                    let (plan, why) = run::plan_for_budget(&task, &requested, budget);
+                    eprintln!("{why}");
+                    plan
+                }
+                None => requested.clone(),
+            },
+        };
+        if let Some(c) = &checkpoint {
+            eprintln!(
+                "resuming {} from iteration {} of {}",
+                dir.display(),
+                c.history.len(),
+                settings.iterations
+            );
+        }
+        let control = Control {
+            out: Some(&dir),
+            checkpoint: Some(dir.join(run::checkpoint::FILE)),
+            every: Every::from_option(checkpoint_every),
+            resume: checkpoint,
+            requested: Some(requested.clone()),
+            stop_after,
+            progress: !opts.quiet,
+        };
+        let outcome = run::optimize_with(&task, &settings, control)?;
         let s = &outcome.summary;
         println!(
-            "{}: param MSE {:.3e} -> {:.3e}, image MSE {:.3e} -> {:.3e}, {:.3} s/iteration ({} iterations), outputs in {}",
+            "{}: param MSE {:.3e} -> {:.3e}, image MSE {:.3e} -> {:.3e}, {:.3} s/iteration ({} iterations{}), outputs in {}",
             s.task,
             s.initial_param_mse,
             s.param_mse,
@@ -137,8 +197,14 @@ pub(super) fn run(args: Args) -> Result<()> {
             s.image_mse,
             s.seconds_per_iteration,
             s.iterations,
+            if s.interrupted { ", interrupted" } else { "" },
             dir.display()
         );
+        if s.interrupted {
+            return Err(Box::new(Interrupted {
+                resume: resume_command(&dir),
+            }));
+        }
         Ok(())
     })
 }

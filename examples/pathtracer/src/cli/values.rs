@@ -80,6 +80,20 @@ pub(super) fn out_dir(s: &str) -> Result<PathBuf, String> {
     }
 }
 
+/// The directory of a run to resume: an existing directory with a `checkpoint.json` (whether
+/// the checkpoint is good is checked next, before any work).
+pub(super) fn run_dir(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    if !s.is_empty() && path.join(crate::run::checkpoint::FILE).is_file() {
+        Ok(path)
+    } else {
+        Err(format!(
+            "allowed: the output directory of an earlier run, holding its {}",
+            crate::run::checkpoint::FILE
+        ))
+    }
+}
+
 /// An image file to write: `.png` (sRGB) or `.exr` (linear), not a directory.
 pub(super) fn image_file(s: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(s);

@@ -6,10 +6,12 @@
 //! recomputes everything.
 
 use std::fs;
+use std::path::Path;
 
 use super::Options;
 use crate::report::Result;
-use crate::run::{self, Outcome, Settings};
+use crate::run::interrupt::Interrupted;
+use crate::run::{self, Control, Earlier, Outcome, Settings};
 use crate::tasks::Task;
 
 /// Runs `task` with `s` (no outputs, no progress bar; one line on stderr), or reads the run
@@ -32,7 +34,8 @@ pub(super) fn optimize(opts: &Options, task: &Task, s: &Settings) -> Result<Outc
     let (outcome, source) = match cached {
         Some(c) => (c.outcome, "cached"),
         None => {
-            let outcome = run::optimize(task, s, None, false)?;
+            let outcome =
+                run_with_checkpoint(opts, task, s, &file.with_extension("checkpoint.json"))?;
             if let Some(build) = build {
                 let entry = CachedRun {
                     key,
@@ -66,6 +69,45 @@ pub(super) fn optimize(opts: &Options, task: &Task, s: &Settings) -> Result<Outc
     Ok(outcome)
 }
 
+/// Runs `task` with `s`, writing its checkpoint to `path` now and then, continuing the
+/// unfinished run `path` holds (Ctrl-C during an experiment), and removing `path` once the
+/// run is done (the cache entry then keeps it). An interrupted run returns [`Interrupted`].
+fn run_with_checkpoint(opts: &Options, task: &Task, s: &Settings, path: &Path) -> Result<Outcome> {
+    let resume = match Earlier::at(path, task, s) {
+        Earlier::Unfinished(c) | Earlier::Finished(c) => {
+            eprintln!(
+                "  {}: resuming from iteration {}",
+                task.name(),
+                c.history.len()
+            );
+            Some(*c)
+        }
+        Earlier::None(None) => None,
+        Earlier::None(Some(why)) => {
+            eprintln!("  {}: starting over ({why})", task.name());
+            None
+        }
+    };
+    let settings = resume
+        .as_ref()
+        .map_or_else(|| s.clone(), |c| c.settings.clone());
+    let control = Control {
+        checkpoint: Some(path.to_path_buf()),
+        resume,
+        requested: Some(s.clone()),
+        stop_after: opts.stop_after,
+        ..Control::default()
+    };
+    let outcome = run::optimize_with(task, &settings, control)?;
+    if outcome.summary.interrupted {
+        return Err(Box::new(Interrupted {
+            resume: String::new(),
+        }));
+    }
+    let _ = fs::remove_file(path);
+    Ok(outcome)
+}
+
 /// One entry of the run cache.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct CachedRun {
@@ -74,21 +116,7 @@ struct CachedRun {
     outcome: Outcome,
 }
 
-/// A hash of the running executable (`None` if it cannot be read: then nothing is cached).
-fn executable_hash() -> Option<u64> {
-    static HASH: std::sync::OnceLock<Option<u64>> = std::sync::OnceLock::new();
-    *HASH.get_or_init(|| {
-        let exe = std::env::current_exe().ok()?;
-        fs::read(exe).ok().map(|bytes| fnv1a(&bytes))
-    })
-}
-
-/// 64-bit FNV-1a: stable across runs and Rust versions, unlike `DefaultHasher`.
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
-}
+use crate::run::checkpoint::{executable_hash, fnv1a};
 
 #[cfg(test)]
 mod tests {
@@ -115,6 +143,47 @@ mod tests {
         let other = optimize(&opts, &t, &s).unwrap();
         assert_ne!(first.summary.seconds_total, other.summary.seconds_total);
         assert_eq!(fs::read_dir(out.join("runs")).unwrap().count(), 2);
+        let _ = fs::remove_dir_all(&out);
+    }
+
+    /// An experiment interrupted in a run (Ctrl-C, here `stop_after`) keeps the runs it
+    /// finished (cached) and the interrupted run's checkpoint; run again, it continues that
+    /// run, which ends as the run left alone.
+    #[test]
+    fn an_interrupted_run_of_an_experiment_is_continued() {
+        let mut opts = quick_options("cache-resume");
+        let out = opts.out.clone();
+        let t = super::super::task("shadow").unwrap();
+        let mut s = Settings::defaults(&t);
+        s.iterations = 8;
+        s.spp = 2;
+        s.scale = Some(0.125);
+        let alone = run::optimize(&t, &s, None, false).unwrap();
+        opts.stop_after = Some(3);
+        let err = optimize(&opts, &t, &s).err().expect("interrupted");
+        assert!(err.is::<Interrupted>(), "{err}");
+        let runs: Vec<_> = fs::read_dir(out.join("runs"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        assert!(
+            runs.len() == 1 && runs[0].ends_with(".checkpoint.json"),
+            "{runs:?}"
+        );
+        opts.stop_after = None;
+        let resumed = optimize(&opts, &t, &s).unwrap();
+        assert_eq!(resumed.summary.param_mse, alone.summary.param_mse);
+        assert_eq!(resumed.summary.image_mse, alone.summary.image_mse);
+        let values = |o: &Outcome| {
+            o.history
+                .iter()
+                .map(|r| (r.loss, r.param_mse, r.image_mse))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(values(&resumed), values(&alone));
+        // The checkpoint is gone, the cache entry is there.
+        let runs: Vec<_> = fs::read_dir(out.join("runs")).unwrap().collect();
+        assert_eq!(runs.len(), 1);
         let _ = fs::remove_dir_all(&out);
     }
 }

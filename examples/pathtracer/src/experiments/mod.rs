@@ -69,6 +69,9 @@ pub struct Options {
     pub seeds: Option<u64>,
     /// Accept cached runs of another build (see [`cache`]).
     pub reuse_runs: bool,
+    /// Stop the first run not cached as Ctrl-C does, once this many iterations are done
+    /// (testing).
+    pub stop_after: Option<usize>,
 }
 
 impl Options {
@@ -309,6 +312,7 @@ pub(crate) fn quick_options(tag: &str) -> Options {
         tasks: None,
         seeds: None,
         reuse_runs: false,
+        stop_after: None,
     }
 }
 

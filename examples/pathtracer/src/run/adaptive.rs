@@ -8,44 +8,52 @@
 //! written (its `loss` is the mean over the batch, its `sigma` the spread of the batch's points,
 //! RMS per coordinate around their mean, its parameter and image errors those of the best point
 //! so far, which is what the run returns).
+//!
+//! Checkpoints: the `Minimizer` keeps its state inside, so a checkpoint holds the value of
+//! every evaluation so far instead. A resumed run starts the same `Minimizer` again and
+//! answers its first evaluations from those values, without rendering (the search is a
+//! function of the seed and the values alone, so it retraces its steps exactly), checks that
+//! it asked for the very points it asked for before (a hash of their bits), and goes on. A
+//! stop (Ctrl-C, `stop_after`) leaves the `Minimizer` by unwinding with a marker of ours
+//! ([`std::panic::resume_unwind`], which prints nothing), caught in [`run`].
 
 use std::cell::{Cell, RefCell};
+use std::panic::{self, AssertUnwindSafe};
 use std::time::{Duration, Instant};
 
 use plateau::{Minimizer, Objective, Points};
 
-use super::{progress_bar, Ended, Row, Settings};
-use crate::render::Image;
+use super::{progress_bar, Ended, Progress, Row, Run};
 use crate::report::Result;
-use crate::tasks::{param_mse, Task};
+use crate::tasks::param_mse;
 
 /// How a run ended, its best point, its history, six snapshots for the progress strip and the
 /// optimisation time: what both methods hand to the outputs.
 pub(super) type Finished = (Ended, Vec<f64>, Vec<Row>, Vec<Vec<f64>>, Duration);
 
+/// Why the search was left by unwinding.
+enum Stop {
+    /// Ctrl-C or `stop_after`: the checkpoint is written.
+    Interrupted,
+    /// The replay of a checkpoint asked for other points.
+    Diverged(String),
+}
+
 /// Runs the adaptive search; returns how it ended, the best point, the history, six snapshots
 /// of the best point for the progress strip, and the optimisation time (the image-error renders
 /// excluded).
-pub(super) fn run<L>(
-    task: &Task,
-    s: &Settings,
-    loss: &L,
-    reference: &Image,
-    start: &[f64],
-    show_progress: bool,
-) -> Result<Finished>
+pub(super) fn run<L>(run: &Run<'_>, loss: &L) -> Result<Finished>
 where
     L: Fn(&[f64], u64) -> f64,
 {
+    let (task, s, start) = (run.task, run.s, run.start);
     if s.budget_seconds.is_some() {
         return Err("a time budget (--budget) is not supported with --method adaptive".into());
     }
     let budget = s.samples * s.iterations;
-    let objective = Recording {
-        task,
-        s,
+    let mut objective = Recording {
+        run,
         loss,
-        reference,
         target: task.target(),
         budget,
         best: RefCell::new((f64::INFINITY, start.to_vec())),
@@ -54,8 +62,38 @@ where
         bests: RefCell::new(vec![start.to_vec()]),
         optimisation_time: Cell::new(Duration::ZERO),
         last: Cell::new(Instant::now()),
-        bar: progress_bar(task.name(), budget, show_progress),
+        bar: progress_bar(task.name(), budget, run.ctl.progress),
+        log: RefCell::new(Vec::new()),
+        points_hash: Cell::new(FNV_START),
+        replay: Vec::new(),
+        replay_hash: FNV_START,
+        checkpoint_at: Cell::new(None),
     };
+    let mut finished = false;
+    if let Some(c) = &run.ctl.resume {
+        let Progress::Adaptive {
+            values,
+            points_hash,
+            best_value,
+            best_point,
+            bests,
+        } = &c.progress
+        else {
+            return Err("the checkpoint is of the paper's loop, this run is adaptive".into());
+        };
+        objective.replay.clone_from(values);
+        objective.replay_hash = *points_hash;
+        *objective.best.get_mut() = (best_value.unwrap_or(f64::INFINITY), best_point.clone());
+        objective.evaluations.set(values.len());
+        *objective.history.get_mut() = c.history.clone();
+        *objective.bests.get_mut() = bests.clone();
+        objective
+            .optimisation_time
+            .set(Duration::from_secs_f64(c.optimisation_seconds));
+        objective.bar.set_position(values.len() as u64);
+        finished = c.finished;
+    }
+    objective.schedule_checkpoint();
     let mut minimizer = Minimizer::new(&objective)
         .budget(budget)
         .sigma0(s.sigma0)
@@ -63,39 +101,64 @@ where
     if let Some((lower, upper)) = task.bounds() {
         minimizer = minimizer.bounds(lower, upper);
     }
-    let minimum = minimizer.run(start)?;
+    let ran = panic::catch_unwind(AssertUnwindSafe(|| minimizer.run(start)));
+    drop(minimizer);
+    let (iterations, evaluations, best, interrupted) = match ran {
+        Ok(minimum) => {
+            let minimum = minimum?;
+            finished = true;
+            (minimum.iterations, minimum.evaluations, minimum.x, false)
+        }
+        Err(payload) => match payload.downcast::<Stop>() {
+            Ok(stop) => match *stop {
+                Stop::Interrupted => {
+                    let history = objective.history.borrow().len();
+                    let best = objective.best.borrow().1.clone();
+                    (history, objective.evaluations.get(), best, true)
+                }
+                Stop::Diverged(why) => return Err(why.into()),
+            },
+            Err(other) => panic::resume_unwind(other),
+        },
+    };
+    if !interrupted {
+        // At the end (also when a finished checkpoint was replayed to its end).
+        objective.save(finished);
+    }
     objective.bar.finish_and_clear();
     let history = objective.history.into_inner();
     let bests = objective.bests.into_inner();
     // Six snapshots, evenly spaced over the iterations (the last is the returned point).
-    let snapshots = if bests.len() <= 1 {
+    let mut snapshots = if bests.len() <= 1 {
         vec![start.to_vec(); 6]
     } else {
         let last = bests.len() - 1;
         (0..6).map(|k| bests[k * last / 5].clone()).collect()
     };
-    let mut snapshots = snapshots;
-    snapshots[5] = minimum.x.clone();
+    snapshots[5] = best.clone();
     let ended = Ended {
-        iterations: minimum.iterations,
-        evaluations: minimum.evaluations,
+        iterations,
+        evaluations,
         stopped_early: false,
+        interrupted,
     };
     Ok((
         ended,
-        minimum.x,
+        best,
         history,
         snapshots,
         objective.optimisation_time.get(),
     ))
 }
 
-/// The loss as an [`Objective`] that records a row of the history after every batch.
+/// FNV-1a's starting value.
+const FNV_START: u64 = 0xcbf2_9ce4_8422_2325;
+
+/// The loss as an [`Objective`] that records a row of the history after every batch, writes
+/// the checkpoints and stops when asked.
 struct Recording<'a, L> {
-    task: &'a Task,
-    s: &'a Settings,
+    run: &'a Run<'a>,
     loss: &'a L,
-    reference: &'a Image,
     target: Vec<f64>,
     budget: usize,
     /// The best value and point so far.
@@ -107,6 +170,16 @@ struct Recording<'a, L> {
     optimisation_time: Cell<Duration>,
     last: Cell<Instant>,
     bar: indicatif::ProgressBar,
+    /// Every value so far, in order (the checkpoint's).
+    log: RefCell<Vec<f64>>,
+    /// FNV-1a of every point so far.
+    points_hash: Cell<u64>,
+    /// The values of the checkpoint being continued, answered without rendering.
+    replay: Vec<f64>,
+    /// The checkpoint's hash of its points, checked when the replay ends.
+    replay_hash: u64,
+    /// The iteration count at which the next checkpoint is due.
+    checkpoint_at: Cell<Option<usize>>,
 }
 
 /// Above this many parameters the best point is not kept per iteration (the progress strip
@@ -115,21 +188,62 @@ const KEEP_BESTS_MAX_DIM: usize = 256;
 
 impl<L: Fn(&[f64], u64) -> f64> Objective for &Recording<'_, L> {
     fn evaluate(&self, point: &[f64], seed: u64) -> f64 {
-        (self.loss)(point, seed)
+        let mut out = [0.0];
+        self.values(std::iter::once(point), &[seed], &mut out);
+        out[0]
     }
 
     fn evaluate_batch(&self, points: Points<'_>, seeds: &[u64], out: &mut [f64]) {
-        for ((point, &seed), o) in points.iter().zip(seeds).zip(out.iter_mut()) {
-            *o = (self.loss)(point, seed);
+        if self.values(points.iter(), seeds, out) {
+            self.record(points, out);
         }
-        self.record(points, out);
     }
 }
 
-impl<L> Recording<'_, L> {
-    /// One row of the history for the batch `points` with values `values`.
+impl<L: Fn(&[f64], u64) -> f64> Recording<'_, L> {
+    /// The values at `points` into `out`: from the replayed checkpoint while it lasts, else
+    /// rendered and logged. Returns whether they are new (to be recorded).
+    fn values<'p>(
+        &self,
+        points: impl Iterator<Item = &'p [f64]>,
+        seeds: &[u64],
+        out: &mut [f64],
+    ) -> bool {
+        let position = self.log.borrow().len();
+        let mut hash = self.points_hash.get();
+        let mut count = 0;
+        let replaying = position < self.replay.len();
+        for ((point, &seed), o) in points.zip(seeds).zip(out.iter_mut()) {
+            for x in point {
+                hash = fnv1a_continue(hash, &x.to_bits().to_le_bytes());
+            }
+            *o = match self.replay.get(position + count) {
+                Some(&v) => v,
+                None if replaying => stop(Stop::Diverged(
+                    "checkpoint: the adaptive search asked for more points than the run it continues (another build?)".into(),
+                )),
+                None => (self.loss)(point, seed),
+            };
+            count += 1;
+        }
+        self.points_hash.set(hash);
+        self.log.borrow_mut().extend_from_slice(&out[..count]);
+        if replaying && position + count == self.replay.len() {
+            if hash != self.replay_hash {
+                stop(Stop::Diverged(
+                    "checkpoint: the adaptive search asked for other points than the run it continues (another build?)".into(),
+                ));
+            }
+            // The replay is not the run's time.
+            self.last.set(Instant::now());
+        }
+        !replaying
+    }
+
+    /// One row of the history for the batch `points` with values `values`; then the
+    /// checkpoint if due, and the stop if asked.
     fn record(&self, points: Points<'_>, values: &[f64]) {
-        let s = self.s;
+        let s = self.run.s;
         let t = self.optimisation_time.get() + self.last.get().elapsed();
         self.optimisation_time.set(t);
         let n = points.dim();
@@ -166,9 +280,10 @@ impl<L> Recording<'_, L> {
         let stride = s.eval_every.saturating_mul(s.samples).max(1);
         let measure = before == 0 || before / stride != after / stride || after >= self.budget;
         let image_mse = measure.then(|| {
-            self.task
+            self.run
+                .task
                 .render(&best.1, s.seed, s.spp, s.view())
-                .mse(self.reference)
+                .mse(self.run.reference)
         });
         let mut history = self.history.borrow_mut();
         let iteration = history.len();
@@ -186,6 +301,65 @@ impl<L> Recording<'_, L> {
         self.bar
             .set_message(format!("best {:.3e}  spread {:.3}", best.0, spread));
         self.bar.inc(count as u64);
+        let done = history.len();
+        drop((best, history));
+        if after < self.budget {
+            if self.run.stop_requested(done) {
+                self.save(false);
+                stop(Stop::Interrupted);
+            }
+            if self.checkpoint_at.get().is_some_and(|k| done >= k) {
+                self.save(false);
+                self.schedule_checkpoint();
+            }
+        }
         self.last.set(Instant::now());
     }
+}
+
+impl<L> Recording<'_, L> {
+    /// Sets when the next checkpoint is due, from the cadence and the cost so far.
+    fn schedule_checkpoint(&self) {
+        let done = self.history.borrow().len();
+        let per_iteration = self.optimisation_time.get().as_secs_f64() / done.max(1) as f64;
+        self.checkpoint_at.set(
+            self.run
+                .ctl
+                .every
+                .next_after(done, per_iteration)
+                .map(|k| done + k),
+        );
+    }
+
+    /// Writes the checkpoint of the search so far.
+    fn save(&self, finished: bool) {
+        let best = self.best.borrow();
+        let progress = Progress::Adaptive {
+            values: self.log.borrow().clone(),
+            points_hash: self.points_hash.get(),
+            best_value: best.0.is_finite().then_some(best.0),
+            best_point: best.1.clone(),
+            bests: self.bests.borrow().clone(),
+        };
+        self.run.saver.save(
+            finished,
+            progress,
+            &self.history.borrow(),
+            &[],
+            self.optimisation_time.get(),
+        );
+    }
+}
+
+/// Leaves the search by unwinding with `why` (no panic message: `resume_unwind` skips the
+/// hook).
+fn stop(why: Stop) -> ! {
+    panic::resume_unwind(Box::new(why))
+}
+
+/// FNV-1a over `bytes`, continuing from `hash`.
+fn fnv1a_continue(hash: u64, bytes: &[u8]) -> u64 {
+    bytes.iter().fold(hash, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
 }

@@ -8,20 +8,25 @@
 
 mod adaptive;
 mod budget;
+pub mod checkpoint;
+pub mod interrupt;
 mod outcome;
 mod outputs;
 mod settings;
 
 use std::cell::Cell;
 use std::ops::ControlFlow;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 use plateau::baseline::{FiniteDifference, Spsa};
-use plateau::{Adam, Annealer, GradientEstimator, Optimizer, PlateauFreeGradient, Seeded, Step};
+use plateau::{
+    Adam, Annealer, GradientEstimator, Optimizer, OptimizerState, PlateauFreeGradient, Seeded, Step,
+};
 
 pub use budget::{plan_for_budget, plan_with_render_time};
+pub use checkpoint::{Build, Checkpoint, CheckpointError, Every, Progress};
 pub use outcome::{write_history, Outcome, Row, Summary};
 pub use settings::{eval_every, Crn, Method, Settings, CURVE_POINTS};
 
@@ -29,40 +34,83 @@ use crate::render::Image;
 use crate::report::Result;
 use crate::tasks::{param_mse, Task};
 
-/// Runs one optimisation of `task`, writing its outputs into `out` if given.
+/// Runs one optimisation of `task`, writing its outputs into `out` if given (no checkpoint,
+/// never interrupted: [`optimize_with`] has those).
 pub fn optimize(
     task: &Task,
     s: &Settings,
     out: Option<&Path>,
     show_progress: bool,
 ) -> Result<Outcome> {
+    optimize_with(
+        task,
+        s,
+        Control {
+            out,
+            progress: show_progress,
+            ..Control::default()
+        },
+    )
+}
+
+/// How a run is kept and stopped: its outputs, its checkpoint and how often, the checkpoint
+/// it continues, when to stop early.
+#[derive(Default)]
+pub struct Control<'a> {
+    /// The directory of the outputs, if any.
+    pub out: Option<&'a Path>,
+    /// The checkpoint file to write, if any (the command line's: `<out>/checkpoint.json`).
+    pub checkpoint: Option<PathBuf>,
+    /// How often to write it (besides at the end and when interrupted).
+    pub every: Every,
+    /// A loaded checkpoint to continue from, already checked against the task and the
+    /// settings ([`Checkpoint::check_matches`]); the run's settings must be its `settings`.
+    pub resume: Option<Checkpoint>,
+    /// The settings the command line asked for, kept in the checkpoint to compare with on
+    /// `--resume` (they differ from the run's after `--budget`'s plan) [default: the run's].
+    pub requested: Option<Settings>,
+    /// Stop as Ctrl-C would, once this many iterations are done (tests, and the hidden
+    /// `--stop-after`).
+    pub stop_after: Option<usize>,
+    /// Whether to show a progress bar.
+    pub progress: bool,
+}
+
+/// Runs one optimisation of `task` under `ctl`: with a checkpoint every so often and at the
+/// end, continuing `ctl.resume` if given, stopping after the current iteration on Ctrl-C
+/// ([`interrupt::requested`]) or at `ctl.stop_after`. An interrupted run writes its
+/// checkpoint and its outputs for the iterations done, and says so in its summary
+/// (`interrupted: true`); continued from that checkpoint it ends bit for bit as the run left
+/// alone (timings aside).
+pub fn optimize_with(task: &Task, s: &Settings, ctl: Control<'_>) -> Result<Outcome> {
     let view = s.view();
     let (start, target) = (task.start(), task.target());
     let reference = task.render(&target, s.seed, s.spp, view);
     let initial = task.render(&start, s.seed, s.spp, view);
 
-    let render_time = Cell::new(Duration::ZERO);
+    let resumed_render = ctl.resume.as_ref().map_or(0.0, |c| c.render_seconds);
+    let render_time = Cell::new(Duration::from_secs_f64(resumed_render));
     let loss = image_loss(task, s, &reference, &render_time);
+    let saver = Saver {
+        path: ctl.checkpoint.clone(),
+        task: task.name(),
+        requested: ctl.requested.as_ref().unwrap_or(s),
+        s,
+        render_time: &render_time,
+    };
+    let run = Run {
+        task,
+        s,
+        reference: &reference,
+        start: &start,
+        ctl: &ctl,
+        saver: &saver,
+    };
     let (ended, final_theta, history, snapshots, optimisation_time) =
         if s.method == Method::Adaptive {
-            adaptive::run(task, s, &loss, &reference, &start, show_progress)?
+            adaptive::run(&run, &loss)?
         } else {
-            let mut estimator = estimator(s, &loss)?;
-            let mut optimizer = optimizer(task, s)?;
-            let mut recorder = Recorder::new(task, s, &reference, &start, show_progress);
-            let run =
-                optimizer.minimize_with(&mut *estimator, &start, |step| recorder.observe(step))?;
-            drop(estimator);
-            let (history, snapshots, optimisation_time) = recorder.finish();
-            let final_theta = run
-                .last_theta()
-                .map_or_else(|| start.clone(), <[f64]>::to_vec);
-            let ended = Ended {
-                iterations: run.iterations(),
-                evaluations: run.evaluations,
-                stopped_early: run.stopped_early,
-            };
-            (ended, final_theta, history, snapshots, optimisation_time)
+            paper_loop(&run, &loss)?
         };
 
     let final_image = task.render(&final_theta, s.seed, s.spp, view);
@@ -75,7 +123,7 @@ pub fn optimize(
         [optimisation_time, render_time.get()],
     );
     let outcome = Outcome { summary, history };
-    if let Some(dir) = out {
+    if let Some(dir) = ctl.out {
         outputs::write_outputs(
             task,
             s,
@@ -86,6 +134,226 @@ pub fn optimize(
         )?;
     }
     Ok(outcome)
+}
+
+/// What an earlier run left at a checkpoint file, for the commands that make many runs
+/// (`all`, the experiments): a finished run (kept), a run to continue, or nothing usable.
+pub enum Earlier {
+    /// The checkpoint of a finished run of this task and these settings.
+    Finished(Box<Checkpoint>),
+    /// The checkpoint of an unfinished run of this task and these settings.
+    Unfinished(Box<Checkpoint>),
+    /// No checkpoint, or one that is refused (the reason, if there was a file): start over.
+    None(Option<CheckpointError>),
+}
+
+impl Earlier {
+    /// Reads and checks the checkpoint at `path` for a run of `task` with the settings
+    /// `requested`.
+    pub fn at(path: &Path, task: &Task, requested: &Settings) -> Earlier {
+        let checked =
+            Checkpoint::load(path).and_then(|c| c.check_matches(task, requested, path).map(|()| c));
+        match checked {
+            Ok(c) if c.finished => Earlier::Finished(Box::new(c)),
+            Ok(c) => Earlier::Unfinished(Box::new(c)),
+            Err(CheckpointError::Unreadable { error, .. })
+                if error.kind() == std::io::ErrorKind::NotFound =>
+            {
+                Earlier::None(None)
+            }
+            Err(e) => Earlier::None(Some(e)),
+        }
+    }
+}
+
+/// What both loops are handed: the task, the settings, the reference, the start, the
+/// control and the checkpoint writer.
+struct Run<'a> {
+    task: &'a Task,
+    s: &'a Settings,
+    reference: &'a Image,
+    start: &'a [f64],
+    ctl: &'a Control<'a>,
+    saver: &'a Saver<'a>,
+}
+
+impl Run<'_> {
+    /// Whether the run should stop after `done` iterations, as Ctrl-C asks.
+    fn stop_requested(&self, done: usize) -> bool {
+        interrupt::requested() || self.ctl.stop_after.is_some_and(|k| done >= k)
+    }
+}
+
+/// Writes a run's checkpoint (if it has a file), keeping the run going when it cannot: the
+/// last good checkpoint stays whole, and the failure is said on stderr.
+struct Saver<'a> {
+    path: Option<PathBuf>,
+    task: &'a str,
+    requested: &'a Settings,
+    s: &'a Settings,
+    render_time: &'a Cell<Duration>,
+}
+
+impl Saver<'_> {
+    /// Writes the checkpoint of a run at `progress` with `history` and `snapshots`.
+    fn save(
+        &self,
+        finished: bool,
+        progress: Progress,
+        history: &[Row],
+        snapshots: &[Vec<f64>],
+        optimisation_time: Duration,
+    ) {
+        let Some(path) = &self.path else { return };
+        let checkpoint = Checkpoint {
+            format: checkpoint::FORMAT,
+            build: Build::current(),
+            task: self.task.into(),
+            requested: self.requested.clone(),
+            settings: self.s.clone(),
+            finished,
+            progress,
+            history: history.to_vec(),
+            snapshots: snapshots.to_vec(),
+            optimisation_seconds: optimisation_time.as_secs_f64(),
+            render_seconds: self.render_time.get().as_secs_f64(),
+        };
+        let written = path
+            .parent()
+            .map_or(Ok(()), |d| {
+                if d.as_os_str().is_empty() {
+                    Ok(())
+                } else {
+                    std::fs::create_dir_all(d)
+                }
+            })
+            .and_then(|()| checkpoint.save(path));
+        if let Err(e) = written {
+            eprintln!(
+                "warning: checkpoint {} not written ({e}); the run goes on, the previous checkpoint (if any) is kept",
+                path.display()
+            );
+        }
+    }
+}
+
+/// Why the paper loop's observer stopped a segment of the run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Why {
+    /// The time budget is spent: the run ends.
+    Budget,
+    /// Ctrl-C or `stop_after`: the run stops, to be continued.
+    Interrupt,
+    /// A checkpoint is due: written, then the loop continues.
+    Checkpoint,
+}
+
+/// The paper's loop (plateau-free gradient, finite differences or SPSA; Adam; annealing),
+/// run in segments between checkpoints: each segment continues the library's
+/// [`OptimizerState`] of the one before ([`Optimizer::minimize_from`]), so the segments give
+/// bit for bit the run in one go.
+fn paper_loop<L>(run: &Run<'_>, loss: &L) -> Result<adaptive::Finished>
+where
+    L: Fn(&[f64], u64) -> f64,
+{
+    let (task, s, ctl) = (run.task, run.s, run.ctl);
+    let mut estimator = estimator(s, loss)?;
+    let mut optimizer = optimizer(task, s)?;
+    let mut recorder = Recorder::new(task, s, run.reference, run.start, ctl.progress);
+    let (mut state, mut finished) = match &ctl.resume {
+        Some(c) => {
+            let Progress::Loop { state } = &c.progress else {
+                return Err("the checkpoint is of an adaptive run, this run is not".into());
+            };
+            recorder.resume(c);
+            (state.clone(), c.finished)
+        }
+        None => (OptimizerState::new(run.start)?, false),
+    };
+    let mut interrupted = false;
+    while !finished {
+        let done = state.iteration;
+        recorder.checkpoint_at = ctl
+            .every
+            .next_after(done, recorder.seconds_per_iteration())
+            .map(|k| done + k);
+        recorder.restart_clock();
+        let segment = optimizer.minimize_from(&mut *estimator, state, |step| {
+            let (over_budget, checkpoint_due) = recorder.observe(step);
+            let why = if over_budget {
+                Some(Why::Budget)
+            } else if run.stop_requested(step.iteration + 1) {
+                Some(Why::Interrupt)
+            } else {
+                checkpoint_due.then_some(Why::Checkpoint)
+            };
+            recorder.why = why;
+            if why.is_some() {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        });
+        state = match segment {
+            Ok(state) => state,
+            Err(e) => {
+                // The state after the last good iteration is kept, to continue from.
+                let (history, snapshots, time) = recorder.parts();
+                run.saver.save(
+                    false,
+                    Progress::Loop { state: *e.state },
+                    history,
+                    snapshots,
+                    time,
+                );
+                return Err(e.error.into());
+            }
+        };
+        let complete = state.iteration >= s.iterations;
+        match recorder.why.take() {
+            _ if complete => finished = true,
+            None | Some(Why::Budget) => finished = true,
+            Some(Why::Interrupt) => {
+                interrupted = true;
+                break;
+            }
+            Some(Why::Checkpoint) => {
+                let (history, snapshots, time) = recorder.parts();
+                run.saver.save(
+                    false,
+                    Progress::Loop {
+                        state: state.clone(),
+                    },
+                    history,
+                    snapshots,
+                    time,
+                );
+            }
+        }
+    }
+    drop(estimator);
+    let (history, snapshots, time) = recorder.parts();
+    run.saver.save(
+        finished,
+        Progress::Loop {
+            state: state.clone(),
+        },
+        history,
+        snapshots,
+        time,
+    );
+    let (history, mut snapshots, optimisation_time) = recorder.finish();
+    if interrupted {
+        // The strip of an interrupted run ends where it stopped.
+        snapshots.push(state.theta.clone());
+    }
+    let ended = Ended {
+        iterations: state.iteration,
+        evaluations: state.history.evaluations,
+        stopped_early: finished && state.iteration < s.iterations,
+        interrupted,
+    };
+    Ok((ended, state.theta, history, snapshots, optimisation_time))
 }
 
 /// The objective: the image MSE of a render at `theta` against `reference`, with the seed
@@ -147,7 +415,7 @@ fn optimizer(task: &Task, s: &Settings) -> Result<Optimizer> {
 
 /// What the loop records after each iteration: a row of the history, six snapshots of theta
 /// for the progress strip, the optimisation time (the image-error renders excluded), the
-/// progress bar; and whether the time budget is spent.
+/// progress bar; whether the time budget is spent and a checkpoint due.
 struct Recorder<'a> {
     task: &'a Task,
     s: &'a Settings,
@@ -159,6 +427,10 @@ struct Recorder<'a> {
     optimisation_time: Duration,
     last: Instant,
     bar: ProgressBar,
+    /// The iteration count at which the next checkpoint is due.
+    checkpoint_at: Option<usize>,
+    /// Why the observer last stopped the loop.
+    why: Option<Why>,
 }
 
 impl<'a> Recorder<'a> {
@@ -182,11 +454,32 @@ impl<'a> Recorder<'a> {
             optimisation_time: Duration::ZERO,
             bar: progress_bar(task.name(), s.iterations, show_progress),
             last: Instant::now(),
+            checkpoint_at: None,
+            why: None,
         }
     }
 
-    /// The loop's observer: records `step`, and stops the run once the budget is spent.
-    fn observe(&mut self, step: &Step<'_>) -> ControlFlow<()> {
+    /// Takes up the record of a checkpoint.
+    fn resume(&mut self, c: &Checkpoint) {
+        self.history.clone_from(&c.history);
+        self.snapshots.clone_from(&c.snapshots);
+        self.optimisation_time = Duration::from_secs_f64(c.optimisation_seconds);
+        self.bar.set_position(c.history.len() as u64);
+    }
+
+    /// Starts timing again (after a checkpoint was written: its time is not the run's).
+    fn restart_clock(&mut self) {
+        self.last = Instant::now();
+    }
+
+    /// The optimisation time per iteration so far, seconds.
+    fn seconds_per_iteration(&self) -> f64 {
+        self.optimisation_time.as_secs_f64() / self.history.len().max(1) as f64
+    }
+
+    /// The loop's observer: records `step`; says whether the budget is spent and whether a
+    /// checkpoint is due.
+    fn observe(&mut self, step: &Step<'_>) -> (bool, bool) {
         let s = self.s;
         self.optimisation_time += self.last.elapsed();
         let seconds = self.optimisation_time.as_secs_f64();
@@ -212,12 +505,14 @@ impl<'a> Recorder<'a> {
         ));
         self.bar.inc(1);
         let over_budget = s.budget_seconds.is_some_and(|b| seconds >= b);
+        let checkpoint_due = self.checkpoint_at.is_some_and(|k| step.iteration + 1 >= k);
         self.last = Instant::now();
-        if over_budget {
-            ControlFlow::Break(())
-        } else {
-            ControlFlow::Continue(())
-        }
+        (over_budget, checkpoint_due)
+    }
+
+    /// The history, the snapshots and the optimisation time so far.
+    fn parts(&self) -> (&[Row], &[Vec<f64>], Duration) {
+        (&self.history, &self.snapshots, self.optimisation_time)
     }
 
     /// The history, the snapshots and the optimisation time.
@@ -274,17 +569,19 @@ fn summarize(
         overhead_seconds_per_iteration: (seconds_total - render_seconds).max(0.0) / done,
         seconds_total,
         stopped_early: run.stopped_early,
+        interrupted: run.interrupted,
         final_theta: (task.dim() <= 16).then(|| final_theta.to_vec()),
         target_theta: (task.dim() <= 16).then(|| target.clone()),
     }
 }
 
-/// How a run's loop ended: its iterations, the evaluations of the loss, and whether a time
-/// budget stopped it.
+/// How a run's loop ended: its iterations, the evaluations of the loss, whether a time
+/// budget stopped it, whether it was interrupted (to be continued).
 struct Ended {
     iterations: usize,
     evaluations: usize,
     stopped_early: bool,
+    interrupted: bool,
 }
 
 /// The progress bar of a run (hidden unless `show`).

@@ -81,6 +81,9 @@ pub struct Summary {
     pub seconds_total: f64,
     /// Whether the time budget stopped the run.
     pub stopped_early: bool,
+    /// Whether Ctrl-C stopped the run before its end (`--resume` continues it).
+    #[serde(default)]
+    pub interrupted: bool,
     /// The final parameters (omitted above 16 dimensions).
     pub final_theta: Option<Vec<f64>>,
     /// The target parameters (omitted above 16 dimensions).

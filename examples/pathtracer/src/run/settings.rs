@@ -45,7 +45,7 @@ pub enum Crn {
 }
 
 /// Everything a run can be told.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Settings {
     /// How the gradient is obtained.
     pub method: Method,
