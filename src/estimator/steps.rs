@@ -372,14 +372,14 @@ impl Step {
         let n = g.len();
         let spreads = spreads.fit(n);
         if last {
-            let mut finite = true;
+            let mut bits = 0u64;
             for (i, gi) in g.iter_mut().enumerate() {
                 let (sum, w) = term(*gi, i);
                 let x = (sum + d * w) / spreads.at(i) * common;
                 *gi = x;
-                finite &= x.is_finite();
+                bits |= nonfinite_bits(x);
             }
-            finite
+            all_finite(bits)
         } else {
             for (i, gi) in g.iter_mut().enumerate() {
                 let (sum, w) = term(*gi, i);
