@@ -612,7 +612,7 @@ impl Core {
         // The first draw lives in the memory of the gradient that will be returned: the
         // estimate has to write that memory anyway, and one vector less is touched.
         pending.first = stream.draw(&settings, c_n, n, b);
-        if let Err(point_error) = write_points(&settings, theta, spreads, &pending.first, b) {
+        if let Err(point_error) = write_points(&settings, theta, spreads, &mut pending.first, b) {
             if !pending.theta_checked && pending.resampled == 0 {
                 // Bad input is reported as such and does not consume an estimate.
                 check::theta(theta)?;
