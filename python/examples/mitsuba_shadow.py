@@ -772,22 +772,24 @@ def write_page_adaptive(args, out: Path, seeds: list[int]) -> Path:
               f"optimiser: {any_run.get('optimiser', '?')}, common random numbers: `{any_run.get('crn')}`.", ""]
     L += ["## Parameter MSE per seed", "",
           "| seed | adaptive: param MSE | adaptive: image MSE | generations | restarts | renders "
-          "| adaptive: s/batch | adaptive: s/render | paper loop: param MSE | paper loop: s/iter (2 renders) |",
-          "|---|---|---|---|---|---|---|---|---|---|"]
+          "| adaptive: s/batch | adaptive: s/render | adaptive: final theta | paper loop: param MSE "
+          "| paper loop: s/iter (2 renders) | paper loop: final theta |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    theta = lambda r: "(" + ", ".join(f"{v:.2f}" for v in r["final_theta"]) + ")" if r.get("final_theta") else "-"  # noqa: E731
     n_ad = n_paper = 0
     for s in seeds:
         r, q = runs.get(s), paper.get(s, {})
         if q and q["param_mse"] <= PAPER_PARAM_MSE:
             n_paper += 1
         if r is None:
-            L.append(f"| {s} | not run | - | - | - | - | - | - | {fmt(q.get('param_mse'))} | "
-                     f"{fmt(q.get('seconds_per_iteration'))} |")
+            L.append(f"| {s} | not run | - | - | - | - | - | - | - | {fmt(q.get('param_mse'))} | "
+                     f"{fmt(q.get('seconds_per_iteration'))} | {theta(q)} |")
             continue
         if r["param_mse"] <= PAPER_PARAM_MSE:
             n_ad += 1
         L.append(f"| {s} | {fmt(r['param_mse'])} | {fmt(r['image_mse'])} | {r['nit']} | {fmt(r.get('restarts'))} | "
-                 f"{r['nfev']} | {fmt(r['seconds_per_iteration'])} | {fmt(r['seconds_per_evaluation'])} | "
-                 f"{fmt(q.get('param_mse'))} | {fmt(q.get('seconds_per_iteration'))} |")
+                 f"{r['nfev']} | {fmt(r['seconds_per_iteration'])} | {fmt(r['seconds_per_evaluation'])} | {theta(r)} | "
+                 f"{fmt(q.get('param_mse'))} | {fmt(q.get('seconds_per_iteration'))} | {theta(q)} |")
     not_run = [s for s in seeds if s not in runs]
     paper_on_run = sum(1 for s in runs if s in paper and paper[s]["param_mse"] <= PAPER_PARAM_MSE)
     L += ["", f"At or below the paper's parameter MSE (1.81e-3): **adaptive {n_ad} of {len(runs)}** seeds run"
@@ -798,20 +800,22 @@ def write_page_adaptive(args, out: Path, seeds: list[int]) -> Path:
         spr = sorted(r["seconds_per_evaluation"] for r in runs.values())
         loads = [r.get("load_average_at_start") for r in runs.values() if r.get("load_average_at_start") is not None]
         L += [f"Seconds per render (optimisation time over renders; 2 CPU cores shared with other work, "
-              f"load average {min(loads):.1f} to {max(loads):.1f} at the runs' starts): adaptive median "
+              f"load average " + (f"{min(loads):.1f} to {max(loads):.1f}" if len(loads) > 1 else f"{loads[0]:.1f}")
+              + " at the runs' starts): adaptive median "
               f"{spr[len(spr) // 2]:.2f}"
               + (f", paper loop median {sorted(q['seconds_per_iteration'] / q['samples'] for q in paper.values())[len(paper) // 2]:.2f}"
                  if paper else "") + ".", ""]
         L += ["The adaptive rows: `generations` is the number of batches the search rendered (its "
               "population grows on each restart), `s/batch` the optimisation time per generation, "
-              "`s/render` per render; `image MSE` is the returned point rendered with the run's seed.", ""]
+              "`s/render` per render; `image MSE` is the returned point rendered with the run's seed; "
+              "`final theta` the returned point (target (-1.50, 1.00), start (-0.50, 2.50)).", ""]
     series = []
     colours = ["tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink"]
     for s in seeds:
         c = colours[s % len(colours)]
         h = out / f"seed-{s}" / "history.csv"
         if h.exists():
-            series.append((f"adaptive, seed {s} (best so far)", read_csv(h), {"color": c, "lw": 1.5}))
+            series.append((f"adaptive, seed {s}", read_csv(h), {"color": c, "lw": 1.5}))
         h = plateau_dir / f"seed-{s}" / "history.csv"
         if h.exists() and s in runs:
             series.append((f"paper loop, seed {s}", read_csv(h), {"color": c, "lw": 0.8, "ls": "--"}))

@@ -185,8 +185,8 @@ def test_adaptive_page_compares_per_seed_and_names_seeds_not_run(tmp_path):
     text = page.read_text()
     rows = {line.split("|")[1].strip(): [c.strip() for c in line.split("|")[2:-1]]
             for line in text.split("## Images")[0].splitlines() if line.startswith("| ") and line.split("|")[1].strip().isdigit()}
-    assert rows["0"][0] == "1.00e-05" and rows["0"][7] == "2.00e-06"
-    assert rows["1"][0] == "not run" and rows["1"][7] == "5.8"
+    assert rows["0"][0] == "1.00e-05" and rows["0"][8] == "2.00e-06"
+    assert rows["1"][0] == "not run" and rows["1"][8] == "5.8"
     assert rows["2"][0] == "3" and rows["2"][2] == "120" and rows["2"][4] == "800"
     # Adaptive 1 of the 2 seeds run; the paper loop 2 of those 2, and 2 of 3 in all.
     assert "**adaptive 1 of 2** seeds run (not run: [1]); the paper's loop 2 of the same 2, 2 of 3 in all" in text
