@@ -808,7 +808,8 @@ def write_page_adaptive(args, out: Path, seeds: list[int]) -> Path:
         L += ["The adaptive rows: `generations` is the number of batches the search rendered (its "
               "population grows on each restart), `s/batch` the optimisation time per generation, "
               "`s/render` per render; `image MSE` is the returned point rendered with the run's seed; "
-              "`final theta` the returned point (target (-1.50, 1.00), start (-0.50, 2.50)).", ""]
+              "`final theta` the returned point (target (-1.50, 1.00), start (-0.50, 2.50)). The start's image MSE: "
+              + ", ".join(f"{fmt(r.get('initial_image_mse'))} (seed {s})" for s, r in sorted(runs.items())) + ".", ""]
     series = []
     colours = ["tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink"]
     for s in seeds:
