@@ -27,6 +27,17 @@ kept; --force reruns it), Mitsuba's AD once into docs/results/mitsuba/ad/, and w
 docs/results/mitsuba.md beside the folder, with our renderer's SHADOW runs read from
 docs/results (--page-only rewrites the page from the runs alone).
 
+plateau's general-purpose adaptive search instead of the paper's loop (no Mitsuba AD):
+
+    python python/examples/mitsuba_shadow.py --method adaptive --out out/mitsuba-adaptive [--seed S]
+    python python/examples/mitsuba_shadow.py --method adaptive --seeds 5 --out docs/results/mitsuba-adaptive
+
+runs ``plateau.minimize(fun, x0, method="adaptive", budget=samples x iterations, sigma0=sigma0,
+seed=seed)`` (the paper's budget: 2 x 400 = 800 renders) on the same objective, one row of
+history.csv per generation, and with --seeds writes OUT.md comparing each seed with the paper
+loop's run (--plateau-runs, default docs/results/mitsuba). --run-seeds 1,4,0 picks the seeds
+to run and their order, --stop-at HH:MM starts no new seed after that time.
+
 Common random numbers, as our task: by default (--crn fixed) every render, the target's
 included, uses the run's seed, so the loss is a deterministic function of theta that reaches
 zero at the target (our renderer's default and the paper's code). --crn pair gives the
@@ -109,8 +120,11 @@ def read_csv(path: Path) -> list[dict]:
         return list(csv.DictReader(f))
 
 
-def plot_convergence(path: Path, runs: list[tuple[str, list[dict], dict]], title: str) -> bool:
-    """runs: (label, rows with iteration/param_mse/loss, matplotlib kwargs)."""
+def plot_convergence(path: Path, runs: list[tuple[str, list[dict], dict]], title: str,
+                     x: str = "iteration", samples: int = 2) -> bool:
+    """runs: (label, rows with iteration/param_mse/loss, matplotlib kwargs). x: "iteration", or
+    "renders" (the rows' renders column; rows without one, the paper loop's, count
+    samples renders an iteration)."""
     try:
         import matplotlib
 
@@ -121,13 +135,16 @@ def plot_convergence(path: Path, runs: list[tuple[str, list[dict], dict]], title
         return False
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
     for label, rows, kw in runs:
-        it = [int(r["iteration"]) for r in rows]
+        if x == "renders":
+            it = [int(r["renders"]) if r.get("renders") else (int(r["iteration"]) + 1) * samples for r in rows]
+        else:
+            it = [int(r["iteration"]) for r in rows]
         a.semilogy(it, [float(r["param_mse"]) for r in rows], label=label, **kw)
         b.semilogy(it, [max(float(r["loss"]), 1e-12) for r in rows], label=label, **kw)
     a.axhline(PAPER_PARAM_MSE, color="k", ls=":", lw=1, label="paper (plateau-free) 1.81e-3")
-    a.set_xlabel("iteration")
+    a.set_xlabel(x)
     a.set_ylabel("parameter MSE")
-    b.set_xlabel("iteration")
+    b.set_xlabel(x)
     b.set_ylabel("image MSE (loss of the iteration's renders)")
     a.legend(fontsize=7)
     b.legend(fontsize=7)
@@ -226,6 +243,135 @@ def run_plateau(mi, args, seed: int, out: Path) -> dict:
         "image_mse": ms.image_mse(final, reference),
         "image_mse_other_seed": image_mse_other_seed,
         "seconds_per_iteration": seconds_total / nit,
+        "seconds_per_evaluation": seconds_total / (nit * args.samples),
+        "seconds_total": seconds_total,
+        "final_theta": [float(v) for v in final_theta],
+        "reached_paper_param_mse": ms.param_mse(final_theta) <= PAPER_PARAM_MSE,
+        "width": int(reference.shape[1]),
+        "height": int(reference.shape[0]),
+    }
+
+
+# --------------------------------------------------------------------------------------
+# 1b. plateau's adaptive search on Mitsuba (--method adaptive).
+
+def spread(points) -> float:
+    """RMS distance per coordinate of a batch's points around their mean (the pathtracer's
+    adaptive rows report the same)."""
+    import numpy as np
+
+    p = np.asarray(points, dtype=np.float64)
+    return float(np.sqrt(np.mean((p - p.mean(axis=0)) ** 2))) if len(p) else float("nan")
+
+
+def run_adaptive(mi, args, seed: int, out: Path) -> dict:
+    """``plateau.minimize(method="adaptive")`` with the paper's budget (N x iterations renders),
+    the task's sigma0 and the run's seed, no bounds (SHADOW's parameters are unbounded): as
+    ``pathtracer optimize shadow --method adaptive`` (examples/pathtracer/src/run/adaptive.rs).
+
+    The objective is the plateau runs': the image MSE against the target, every render with the
+    run's seed (--crn fixed), or with the seed plateau gives the generation (--crn pair: one
+    seed for all points of a generation, a new one per generation). plateau hands each
+    generation's points over at once (batched=True): one row of history.csv per generation.
+    """
+    import numpy as np
+
+    try:
+        import plateau
+    except ImportError:
+        sys.exit("--method adaptive needs the Python package plateau: `pip install ./python` "
+                 "(the numpy stand-in has only the paper's loop)")
+    optimiser = "plateau " + str(getattr(plateau, "__version__", "")).strip()
+    scene = ms.ShadowScene(mi, spp=args.spp, scale=args.scale)
+    reference = scene.render(ms.TARGET, seed)
+    initial = scene.render(ms.START, seed)
+    write_png(mi, reference, out / "target.png")
+    write_png(mi, initial, out / "initial.png")
+    budget = args.samples * args.iterations
+
+    # Per generation: its points, values and the optimisation time at its end (renders and the
+    # search's own work; the image-error renders below come after the run).
+    batches: list[tuple[np.ndarray, np.ndarray, float]] = []
+    t0 = time.perf_counter()
+
+    def evaluate(X, seeds):
+        X = np.asarray(X, dtype=np.float64)
+        values = np.array([ms.image_mse(scene.render(x, int(s)), reference) for x, s in zip(X, seeds)])
+        batches.append((X.copy(), values, time.perf_counter() - t0))
+        if args.progress:
+            done = sum(len(b[1]) for b in batches)
+            if done // (args.progress * args.samples) != (done - len(X)) // (args.progress * args.samples) or done >= budget:
+                best = min(float(b[1].min()) for b in batches)
+                print(f"  seed {seed} renders {done}/{budget}: best image MSE {best:.3e}, spread {spread(X):.3f}, "
+                      f"{batches[-1][2] / done:.2f} s/render", file=sys.stderr, flush=True)
+        return values
+
+    if args.crn == "pair":
+        def fun(X, seeds):
+            return evaluate(X, seeds)
+    else:
+        def fun(X):
+            return evaluate(X, [seed] * len(X))
+
+    t0 = time.perf_counter()
+    result = plateau.minimize(fun, np.array(ms.START, dtype=np.float64), method="adaptive", budget=budget,
+                              sigma0=args.sigma0, seed=seed, batched=True, seeded=(args.crn == "pair"))
+    seconds_total = batches[-1][2] if batches else time.perf_counter() - t0
+    final_theta = np.asarray(result.x, dtype=np.float64)
+
+    # history.csv: row k is generation k: its size, the renders so far, the spread of its
+    # points, its mean image MSE (loss); the best point so far (what the run returns), its
+    # loss, parameter MSE and (every eval_every x N renders, and last) its image MSE rendered
+    # with the run's seed.
+    rows = []
+    best_value, best_x, nfev = math.inf, np.array(ms.START, dtype=np.float64), 0
+    stride = max(args.eval_every * args.samples, 1)
+    for k, (X, values, seconds) in enumerate(batches):
+        before = nfev
+        nfev += len(values)
+        for x, v in zip(X, values):
+            if math.isfinite(v) and v < best_value:
+                best_value, best_x = float(v), x.copy()
+        rows.append({
+            "iteration": k,
+            "population": len(values),
+            "renders": nfev,
+            "sigma": spread(X),
+            "loss": float(np.mean(values)),
+            "best_loss": best_value,
+            "param_mse": ms.param_mse(best_x),
+            "image_mse": None,
+            "seconds": seconds,
+            "theta0": float(best_x[0]),
+            "theta1": float(best_x[1]),
+            "_measure": before == 0 or before // stride != nfev // stride or k == len(batches) - 1,
+        })
+    for r in rows:
+        if r.pop("_measure"):
+            r["image_mse"] = ms.image_mse(scene.render((r["theta0"], r["theta1"]), seed), reference)
+    final = scene.render(final_theta, seed)
+    write_png(mi, final, out / "final.png")
+    other = seed + 0x5EED
+    image_mse_other_seed = ms.image_mse(scene.render(final_theta, other), scene.render(ms.TARGET, other))
+    write_csv(out / "history.csv", rows)
+    nit = int(result.nit)
+    nfev = int(result.nfev)
+    return {
+        "optimiser": optimiser,
+        "budget": budget,
+        "nit": nit,
+        "nfev": nfev,
+        "restarts": None if result.get("restarts") is None else int(result.restarts),
+        "message": str(result.message),
+        "final_sigma": None if result.get("sigma") is None else float(result.sigma),
+        "initial_param_mse": ms.param_mse(ms.START),
+        "initial_image_mse": ms.image_mse(initial, reference),
+        "param_mse": ms.param_mse(final_theta),
+        "image_mse": ms.image_mse(final, reference),
+        "best_loss": float(result.fun),
+        "image_mse_other_seed": image_mse_other_seed,
+        "seconds_per_iteration": seconds_total / max(nit, 1),
+        "seconds_per_evaluation": seconds_total / max(nfev, 1),
         "seconds_total": seconds_total,
         "final_theta": [float(v) for v in final_theta],
         "reached_paper_param_mse": ms.param_mse(final_theta) <= PAPER_PARAM_MSE,
@@ -314,6 +460,7 @@ def settings(args, seed: int) -> dict:
     return {
         "task": "shadow",
         "backbone": "mitsuba",
+        "method": args.method,
         "variant": args.variant,
         "sampling": "radial",
         "antithetic": True,
@@ -331,7 +478,15 @@ def settings(args, seed: int) -> dict:
         "target_theta": list(ms.TARGET),
         "paper_param_mse": PAPER_PARAM_MSE,
         "paper_mitsuba_param_mse": PAPER_MITSUBA_PARAM_MSE,
+    } if args.method == "plateau" else {
+        # The adaptive search has no sampler, annealer or learning rate: its budget is the
+        # paper loop's renders (samples x iterations), its starting spread sigma0.
+        k: v for k, v in settings_plateau(args, seed).items() if k not in ("sampling", "antithetic", "anneal", "lr")
     }
+
+
+def settings_plateau(args, seed: int) -> dict:
+    return settings(argparse.Namespace(**{**vars(args), "method": "plateau"}), seed) | {"method": args.method}
 
 
 def run_one(mi, args, seed: int, out: Path, ad: dict | None) -> dict:
@@ -340,6 +495,15 @@ def run_one(mi, args, seed: int, out: Path, ad: dict | None) -> dict:
     summary["mitsuba_version"] = mi.__version__
     summary["load_average_at_start"] = os.getloadavg()[0]
     summary["cpus"] = os.cpu_count()
+    if args.method == "adaptive":
+        print(f"seed {seed}: plateau's adaptive search on Mitsuba, {args.samples * args.iterations} renders -> {out}",
+              file=sys.stderr, flush=True)
+        summary.update(run_adaptive(mi, args, seed, out))
+        print(f"seed {seed}: parameter MSE {summary['param_mse']:.3e}, {summary['nit']} generations, "
+              f"{summary['seconds_per_evaluation']:.2f} s/render", file=sys.stderr, flush=True)
+        (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        replot_adaptive(mi, args, out, summary)
+        return summary
     print(f"seed {seed}: plateau on Mitsuba, {args.iterations} iterations -> {out}", file=sys.stderr, flush=True)
     summary.update(run_plateau(mi, args, seed, out))
     print(f"seed {seed}: parameter MSE {summary['param_mse']:.3e}, "
@@ -359,6 +523,13 @@ def ad_keys(ad: dict) -> dict:
     keys = {k: v for k, v in ad.items() if k.startswith("mitsuba_ad_")}
     keys["mitsuba_ad_dir"] = "../ad"
     return keys
+
+
+def replot_adaptive(mi, args, out: Path, summary: dict) -> None:
+    plot_convergence(out / "convergence.png", [("adaptive (Mitsuba)", read_csv(out / "history.csv"), {})],
+                     f"SHADOW on Mitsuba {mi.__version__}, seed {summary['seed']}: plateau's adaptive search "
+                     f"({summary['nfev']} renders, sigma0={args.sigma0}, {args.spp} spp); best point so far",
+                     x="renders")
 
 
 def replot(mi, args, out: Path, summary: dict) -> None:
@@ -558,12 +729,127 @@ def write_page(args, out: Path, seeds: list[int]) -> Path:
     return page
 
 
+def write_page_adaptive(args, out: Path, seeds: list[int]) -> Path:
+    """The adaptive runs' page (default OUT.md): per seed the adaptive search's figures next to
+    the paper loop's Mitsuba run of the same seed (--plateau-runs), seeds without a run named."""
+    page = Path(args.page) if args.page else out.with_suffix(".md")
+    rel = lambda p: os.path.relpath(p, page.parent)  # noqa: E731
+    plateau_dir = Path(args.plateau_runs) if args.plateau_runs else REPO / "docs" / "results" / "mitsuba"
+    runs, paper = {}, {}
+    for s in seeds:
+        f = out / f"seed-{s}" / "summary.json"
+        if f.exists():
+            runs[s] = json.loads(f.read_text())
+        f = plateau_dir / f"seed-{s}" / "summary.json"
+        if f.exists():
+            paper[s] = json.loads(f.read_text())
+    outrel = os.path.relpath(out.resolve(), REPO)
+    cmd = (f"python python/examples/mitsuba_shadow.py --method adaptive --seeds {len(seeds)}"
+           + (f" --run-seeds {args.run_seeds}" if args.run_seeds else "")
+           + (f" --stop-at {args.stop_at}" if args.stop_at else "")
+           + f" --out {outrel}")
+    any_run = next(iter(runs.values()), {})
+    budget = any_run.get("budget", args.samples * args.iterations)
+    L = ["# SHADOW on Mitsuba 3: plateau's adaptive search next to the paper's loop", "",
+         f"Written by `nice -n 5 {cmd}` (after `scripts/install-mitsuba` and `pip install ./python`; "
+         "`--page-only` rewrites this page from the runs; `--stop-at` starts no new seed after that time, "
+         "`--run-seeds` gives the order). "
+         f"Runs: `{outrel}/seed-<k>/` (history.csv, one row per generation; summary.json; target, start "
+         "and final images; convergence.png). The paper loop's runs: "
+         f"`{os.path.relpath(plateau_dir.resolve(), REPO)}/seed-<k>/`, from [mitsuba.md](mitsuba.md).", "",
+         f"Both get the same: the scene, start (-0.5, 2.5) and target (-1.5, 1.0) of SHADOW at 256x192, "
+         f"{any_run.get('spp', args.spp)} spp, depth 6, Mitsuba as a black box (image MSE against the target, "
+         "every render, the target's included, with the run's seed), the run's seed, and the paper's "
+         f"budget: N x iterations = 2 x 400 = {budget} renders. The adaptive search is "
+         f"`plateau.minimize(fun, x0, method=\"adaptive\", budget={budget}, sigma0={any_run.get('sigma0', args.sigma0)}, "
+         "seed=seed, batched=True)` (no bounds: SHADOW's parameters are unbounded), configured as "
+         "`pathtracer optimize shadow --method adaptive` (examples/pathtracer/src/run/adaptive.rs); it "
+         "returns the best point it rendered. The paper's loop: N = 2, sigma0 = 0.5, LR 0.02, 400 "
+         "iterations, radial sampler with antithetic pairs, the paper's annealer, Adam; it returns "
+         "the last iterate.", ""]
+    if runs:
+        L += [f"Mitsuba {any_run.get('mitsuba_version', '?')} (`{any_run.get('variant', args.variant)}`), "
+              f"optimiser: {any_run.get('optimiser', '?')}, common random numbers: `{any_run.get('crn')}`.", ""]
+    L += ["## Parameter MSE per seed", "",
+          "| seed | adaptive: param MSE | adaptive: image MSE | generations | restarts | renders "
+          "| adaptive: s/batch | adaptive: s/render | adaptive: final theta | paper loop: param MSE "
+          "| paper loop: s/iter (2 renders) | paper loop: final theta |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    theta = lambda r: "(" + ", ".join(f"{v:.2f}" for v in r["final_theta"]) + ")" if r.get("final_theta") else "-"  # noqa: E731
+    n_ad = n_paper = 0
+    for s in seeds:
+        r, q = runs.get(s), paper.get(s, {})
+        if q and q["param_mse"] <= PAPER_PARAM_MSE:
+            n_paper += 1
+        if r is None:
+            L.append(f"| {s} | not run | - | - | - | - | - | - | - | {fmt(q.get('param_mse'))} | "
+                     f"{fmt(q.get('seconds_per_iteration'))} | {theta(q)} |")
+            continue
+        if r["param_mse"] <= PAPER_PARAM_MSE:
+            n_ad += 1
+        L.append(f"| {s} | {fmt(r['param_mse'])} | {fmt(r['image_mse'])} | {r['nit']} | {fmt(r.get('restarts'))} | "
+                 f"{r['nfev']} | {fmt(r['seconds_per_iteration'])} | {fmt(r['seconds_per_evaluation'])} | {theta(r)} | "
+                 f"{fmt(q.get('param_mse'))} | {fmt(q.get('seconds_per_iteration'))} | {theta(q)} |")
+    not_run = [s for s in seeds if s not in runs]
+    paper_on_run = sum(1 for s in runs if s in paper and paper[s]["param_mse"] <= PAPER_PARAM_MSE)
+    L += ["", f"At or below the paper's parameter MSE (1.81e-3): **adaptive {n_ad} of {len(runs)}** seeds run"
+          + (f" (not run: {not_run})" if not_run else "")
+          + f"; the paper's loop {paper_on_run} of the same {len(runs)}, {n_paper} of {len(paper)} in all. "
+          "Goal of issue 13: at least 4 of 5 on Mitsuba.", ""]
+    if runs:
+        spr = sorted(r["seconds_per_evaluation"] for r in runs.values())
+        loads = [r.get("load_average_at_start") for r in runs.values() if r.get("load_average_at_start") is not None]
+        L += [f"Seconds per render (optimisation time over renders; 2 CPU cores shared with other work, "
+              f"load average " + (f"{min(loads):.1f} to {max(loads):.1f}" if len(loads) > 1 else f"{loads[0]:.1f}")
+              + " at the runs' starts): adaptive median "
+              f"{spr[len(spr) // 2]:.2f}"
+              + (f", paper loop median {sorted(q['seconds_per_iteration'] / q['samples'] for q in paper.values())[len(paper) // 2]:.2f}"
+                 if paper else "") + ".", ""]
+        L += ["The adaptive rows: `generations` is the number of batches the search rendered (its "
+              "population grows on each restart), `s/batch` the optimisation time per generation, "
+              "`s/render` per render; `image MSE` is the returned point rendered with the run's seed; "
+              "`final theta` the returned point (target (-1.50, 1.00), start (-0.50, 2.50)). The start's image MSE: "
+              + ", ".join(f"{fmt(r.get('initial_image_mse'))} (seed {s})" for s, r in sorted(runs.items())) + ".", ""]
+    series = []
+    colours = ["tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink"]
+    for s in seeds:
+        c = colours[s % len(colours)]
+        h = out / f"seed-{s}" / "history.csv"
+        if h.exists():
+            series.append((f"adaptive, seed {s}", read_csv(h), {"color": c, "lw": 1.5}))
+        h = plateau_dir / f"seed-{s}" / "history.csv"
+        if h.exists() and s in runs:
+            series.append((f"paper loop, seed {s}", read_csv(h), {"color": c, "lw": 0.8, "ls": "--"}))
+    conv = out / "convergence_seeds.png"
+    if series and plot_convergence(conv, series, "SHADOW on Mitsuba 3: adaptive search (solid) and the paper's "
+                                   "loop (dashed) per seed", x="renders", samples=args.samples):
+        L += ["## Convergence", "",
+              "Against renders. Adaptive: the best point so far; the paper's loop: its iterate (the mean of "
+              "its antithetic pair). Right: the mean image MSE of each batch's renders.", "",
+              f"![convergence]({rel(conv)})", ""]
+    L += ["## Images", "", "| seed | target | start | adaptive | paper loop |", "|---|---|---|---|---|"]
+    for s in seeds:
+        d = out / f"seed-{s}"
+        if s not in runs:
+            continue
+        q = plateau_dir / f"seed-{s}" / "final.png"
+        L.append(f"| {s} | ![]({rel(d / 'target.png')}) | ![]({rel(d / 'initial.png')}) | ![]({rel(d / 'final.png')}) | "
+                 + (f"![]({rel(q)})" if q.exists() else "-") + " |")
+    L += [""]
+    page.write_text("\n".join(L))
+    print(f"wrote {page}", file=sys.stderr)
+    return page
+
+
 # --------------------------------------------------------------------------------------
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--out", default="out/mitsuba-shadow", help="output folder")
+    p.add_argument("--method", choices=["plateau", "adaptive"], default="plateau",
+                   help="plateau: the paper's loop (and Mitsuba's AD); adaptive: plateau.minimize(method='adaptive') "
+                        "with a budget of samples x iterations renders (no AD)")
+    p.add_argument("--out", default=None, help="output folder (default out/mitsuba-shadow, or out/mitsuba-shadow-adaptive)")
     p.add_argument("--seed", type=int, default=0, help="the run's seed (perturbations and renders)")
     p.add_argument("--seeds", type=int, default=0, help="run seeds 0..K-1 into OUT/seed-<k> and write OUT.md")
     p.add_argument("--page-only", action="store_true", help="with --seeds: only rewrite the results page")
@@ -572,6 +858,13 @@ def main(argv=None) -> int:
     p.add_argument("--run-pathtracer", action="store_true",
                    help="with --seeds: run our renderer (cargo) for the seeds docs/results lacks")
     p.add_argument("--force", action="store_true", help="with --seeds: rerun seeds that have a summary.json")
+    p.add_argument("--run-seeds", default=None,
+                   help="with --seeds: the seeds to run, in this order (comma-separated; default 0..K-1); "
+                        "the page covers 0..K-1 and names the others not run")
+    p.add_argument("--stop-at", default=None,
+                   help="with --seeds: start no new seed at or after this time of day (HH:MM, machine clock)")
+    p.add_argument("--plateau-runs", default=None,
+                   help="with --method adaptive: the paper loop's per-seed runs to compare with (default docs/results/mitsuba)")
     p.add_argument("--iterations", type=int, default=400)
     p.add_argument("--samples", type=int, default=2, help="N: renders per gradient")
     p.add_argument("--sigma0", type=float, default=0.5)
@@ -593,12 +886,34 @@ def main(argv=None) -> int:
                    help="use the numpy stand-in optimiser if the plateau package is not installed")
     args = p.parse_args(argv)
 
-    out = Path(args.out)
+    out = Path(args.out or ("out/mitsuba-shadow" + ("-adaptive" if args.method == "adaptive" else "")))
     seeds = list(range(args.seeds))
+    order = seeds
+    if args.run_seeds:
+        try:
+            order = [int(v) for v in args.run_seeds.split(",") if v.strip()]
+        except ValueError:
+            p.error(f"--run-seeds: comma-separated seeds expected, got {args.run_seeds!r}")
+        if any(v not in seeds for v in order):
+            p.error(f"--run-seeds {args.run_seeds}: every seed must lie in 0..{args.seeds - 1} (--seeds {args.seeds})")
+    stop_at = None
+    if args.stop_at:
+        try:
+            stop_at = time.strptime(args.stop_at, "%H:%M")
+        except ValueError:
+            p.error(f"--stop-at: HH:MM expected, got {args.stop_at!r}")
     if args.seeds and args.page_only:
-        merge_ad(None, args, out, seeds)
-        write_page(args, out, seeds)
+        if args.method == "adaptive":
+            write_page_adaptive(args, out, seeds)
+        else:
+            merge_ad(None, args, out, seeds)
+            write_page(args, out, seeds)
         return 0
+    for s in seeds:  # a folder holds one method's runs
+        f = out / f"seed-{s}" / "summary.json"
+        if f.exists() and not args.force and json.loads(f.read_text()).get("method", "plateau") != args.method:
+            p.error(f"{f} is a run of method {json.loads(f.read_text()).get('method', 'plateau')!r}, not "
+                    f"{args.method!r}: give --method {args.method} its own --out")
     mi = ms.load_mitsuba(args.variant)
     if args.ad_only:
         run_study_ad(mi, args, out, seeds or [args.seed], force=True)
@@ -611,17 +926,33 @@ def main(argv=None) -> int:
         return 0
     if not args.seeds:
         s = run_one(mi, args, args.seed, out, None)
-        print(json.dumps({k: s[k] for k in ("param_mse", "image_mse", "seconds_per_iteration",
-                                             "mitsuba_ad_param_mse") if k in s}))
+        print(json.dumps({k: s[k] for k in ("method", "param_mse", "image_mse", "seconds_per_iteration",
+                                             "seconds_per_evaluation", "mitsuba_ad_param_mse") if k in s}))
+        return 0
+    if args.method == "adaptive":
+        for s in order:
+            d = out / f"seed-{s}"
+            if (d / "summary.json").exists() and not args.force:
+                print(f"seed {s}: kept {d / 'summary.json'}", file=sys.stderr)
+                continue
+            if stop_at and time.localtime()[3:5] >= stop_at[3:5]:
+                print(f"seed {s}: not started (--stop-at {args.stop_at})", file=sys.stderr)
+                continue
+            run_one(mi, args, s, d, None)
+            write_page_adaptive(args, out, seeds)
+        write_page_adaptive(args, out, seeds)
         return 0
     ad_file = out / "ad" / "summary.json"
     ad = json.loads(ad_file.read_text()) if ad_file.exists() and not args.force else None
     # plateau per seed first (the goal), then Mitsuba's AD once (from the same start, seed 0's
     # renders), whose figures then go into every seed's summary.
-    for s in seeds:
+    for s in order:
         d = out / f"seed-{s}"
         if (d / "summary.json").exists() and not args.force:
             print(f"seed {s}: kept {d / 'summary.json'}", file=sys.stderr)
+            continue
+        if stop_at and time.localtime()[3:5] >= stop_at[3:5]:
+            print(f"seed {s}: not started (--stop-at {args.stop_at})", file=sys.stderr)
             continue
         run_one(mi, args, s, d, ad_keys(ad) if ad else {})
         write_page(args, out, seeds)

@@ -108,3 +108,86 @@ def test_short_run_writes_everything(tmp_path):
     # Four steps of LR 0.02 move theta at most 0.08 per coordinate.
     assert abs(float(rows[-1]["theta0"]) + 0.5) <= 0.081 and abs(float(rows[-1]["theta1"]) - 2.5) <= 0.081
     assert rows[0]["image_mse"] and rows[2]["image_mse"] and not rows[1]["image_mse"]
+
+
+@needs_mitsuba
+@pytest.mark.skipif(not HAVE_PLATEAU and not REQUIRE,
+                    reason="--method adaptive needs the plateau package (pip install ./python)")
+def test_short_adaptive_run_writes_everything_and_returns_its_best_render(tmp_path):
+    out = tmp_path / "adaptive"
+    # Budget N x iterations = 2 x 15 = 30 renders at 32x24.
+    cmd = [sys.executable, str(EXAMPLE), "--method", "adaptive", "--out", str(out), "--iterations", "15",
+           "--scale", "0.125", "--spp", "8", "--eval-every", "2", "--seed", "4", "--progress", "0"]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=REPO)
+    assert p.returncode == 0, p.stderr[-3000:]
+    for f in ("target.png", "initial.png", "final.png", "convergence.png", "history.csv", "summary.json"):
+        assert (out / f).is_file(), f
+    assert not (out / "ad_history.csv").exists()  # the adaptive method runs no Mitsuba AD
+    s = json.loads((out / "summary.json").read_text())
+    assert s["method"] == "adaptive" and s["seed"] == 4 and s["budget"] == 30
+    assert s["optimiser"].startswith("plateau")
+    assert 0 < s["nfev"] <= 30 and s["nit"] >= 2
+    for k in ("param_mse", "image_mse", "seconds_per_iteration", "seconds_per_evaluation", "best_loss"):
+        assert math.isfinite(s[k]), k
+    assert s["seconds_per_iteration"] >= s["seconds_per_evaluation"] > 0
+    rows = list(csv.DictReader(open(out / "history.csv")))
+    # One row per generation; the renders add up to nfev.
+    assert [int(r["iteration"]) for r in rows] == list(range(s["nit"]))
+    assert int(rows[-1]["renders"]) == s["nfev"] == sum(int(r["population"]) for r in rows)
+    # The rows follow the best point so far: its loss never grows, and the run returns it, the
+    # render with the least image MSE (every render uses the run's seed, so rendering it again
+    # gives the same image and loss).
+    best = [float(r["best_loss"]) for r in rows]
+    assert all(b <= a for a, b in zip(best, best[1:]))
+    assert s["best_loss"] == pytest.approx(best[-1], rel=1e-6)
+    assert s["image_mse"] == pytest.approx(s["best_loss"], rel=1e-6)
+    assert s["final_theta"] == pytest.approx([float(rows[-1]["theta0"]), float(rows[-1]["theta1"])], rel=1e-6)
+    assert s["best_loss"] <= s["initial_image_mse"]
+    assert s["param_mse"] == pytest.approx(sum((a - b) ** 2 for a, b in zip(s["final_theta"], (-1.5, 1.0))) / 2)
+    # The image error of the best point every eval_every x N = 4 renders (and last).
+    assert rows[0]["image_mse"] and rows[-1]["image_mse"]
+    assert float(rows[-1]["image_mse"]) == pytest.approx(s["image_mse"], rel=1e-6)
+
+
+def test_a_folder_holds_one_methods_runs(tmp_path):
+    out = tmp_path / "study"
+    (out / "seed-0").mkdir(parents=True)
+    (out / "seed-0" / "summary.json").write_text(json.dumps({"seed": 0, "param_mse": 1.0}))  # a paper-loop run
+    p = subprocess.run([sys.executable, str(EXAMPLE), "--method", "adaptive", "--seeds", "1", "--out", str(out)],
+                       capture_output=True, text=True, timeout=300, cwd=REPO)
+    assert p.returncode != 0
+    assert "not 'adaptive'" in p.stderr and "own --out" in p.stderr
+
+
+def test_adaptive_page_compares_per_seed_and_names_seeds_not_run(tmp_path):
+    """--page-only with --method adaptive: the page from the runs alone (no mitsuba needed)."""
+    out, paper = tmp_path / "mitsuba-adaptive", tmp_path / "mitsuba"
+    hist = "iteration,population,renders,sigma,loss,best_loss,param_mse,image_mse,seconds,theta0,theta1\n"
+    for s, pm in ((0, 1e-5), (2, 3.0)):
+        d = out / f"seed-{s}"
+        d.mkdir(parents=True)
+        (d / "summary.json").write_text(json.dumps({
+            "method": "adaptive", "seed": s, "budget": 800, "nit": 120, "nfev": 800, "restarts": 1,
+            "param_mse": pm, "image_mse": 2e-5, "seconds_per_iteration": 6.0, "seconds_per_evaluation": 0.9,
+            "load_average_at_start": 4.0, "spp": 32, "sigma0": 0.5, "crn": "fixed", "mitsuba_version": "3.9.1",
+            "variant": "llvm_ad_rgb", "optimiser": "plateau 0.1.0"}))
+        (d / "history.csv").write_text(hist + f"0,6,6,0.5,0.01,0.009,{pm},,1.0,-1.5,1.0\n")
+    for s, pm in ((0, 2e-6), (1, 5.8), (2, 4e-5)):
+        d = paper / f"seed-{s}"
+        d.mkdir(parents=True)
+        (d / "summary.json").write_text(json.dumps({"seed": s, "param_mse": pm, "seconds_per_iteration": 4.8,
+                                                    "samples": 2}))
+    page = tmp_path / "page.md"
+    p = subprocess.run([sys.executable, str(EXAMPLE), "--method", "adaptive", "--seeds", "3", "--page-only",
+                        "--out", str(out), "--plateau-runs", str(paper), "--page", str(page)],
+                       capture_output=True, text=True, timeout=300, cwd=REPO)
+    assert p.returncode == 0, p.stderr[-3000:]
+    text = page.read_text()
+    rows = {line.split("|")[1].strip(): [c.strip() for c in line.split("|")[2:-1]]
+            for line in text.split("## Images")[0].splitlines() if line.startswith("| ") and line.split("|")[1].strip().isdigit()}
+    assert rows["0"][0] == "1.00e-05" and rows["0"][8] == "2.00e-06"
+    assert rows["1"][0] == "not run" and rows["1"][8] == "5.8"
+    assert rows["2"][0] == "3" and rows["2"][2] == "120" and rows["2"][4] == "800"
+    # Adaptive 1 of the 2 seeds run; the paper loop 2 of those 2, and 2 of 3 in all.
+    assert "**adaptive 1 of 2** seeds run (not run: [1]); the paper's loop 2 of the same 2, 2 of 3 in all" in text
+    assert "--method adaptive --seeds 3" in text
