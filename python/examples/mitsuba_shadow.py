@@ -929,15 +929,20 @@ def main(argv=None) -> int:
         print(json.dumps({k: s[k] for k in ("method", "param_mse", "image_mse", "seconds_per_iteration",
                                              "seconds_per_evaluation", "mitsuba_ad_param_mse") if k in s}))
         return 0
-    if args.method == "adaptive":
+    def seeds_to_run():
+        """The seeds of ``order`` still to run, with their folders: finished ones are kept, and
+        none starts after ``--stop-at``."""
         for s in order:
             d = out / f"seed-{s}"
             if (d / "summary.json").exists() and not args.force:
                 print(f"seed {s}: kept {d / 'summary.json'}", file=sys.stderr)
-                continue
-            if stop_at and time.localtime()[3:5] >= stop_at[3:5]:
+            elif stop_at and time.localtime()[3:5] >= stop_at[3:5]:
                 print(f"seed {s}: not started (--stop-at {args.stop_at})", file=sys.stderr)
-                continue
+            else:
+                yield s, d
+
+    if args.method == "adaptive":
+        for s, d in seeds_to_run():
             run_one(mi, args, s, d, None)
             write_page_adaptive(args, out, seeds)
         write_page_adaptive(args, out, seeds)
@@ -946,14 +951,7 @@ def main(argv=None) -> int:
     ad = json.loads(ad_file.read_text()) if ad_file.exists() and not args.force else None
     # plateau per seed first (the goal), then Mitsuba's AD once (from the same start, seed 0's
     # renders), whose figures then go into every seed's summary.
-    for s in order:
-        d = out / f"seed-{s}"
-        if (d / "summary.json").exists() and not args.force:
-            print(f"seed {s}: kept {d / 'summary.json'}", file=sys.stderr)
-            continue
-        if stop_at and time.localtime()[3:5] >= stop_at[3:5]:
-            print(f"seed {s}: not started (--stop-at {args.stop_at})", file=sys.stderr)
-            continue
+    for s, d in seeds_to_run():
         run_one(mi, args, s, d, ad_keys(ad) if ad else {})
         write_page(args, out, seeds)
     if ad is None and args.ad_iterations > 0:
