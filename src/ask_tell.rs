@@ -438,6 +438,9 @@ struct Adaptive {
     seeds: Vec<u64>,
 }
 
+/// Mixed into the seed for the polish's random stream, so that it is not the loop's.
+const POLISH_STREAM: u64 = 0x706f_6c69_7368_0001;
+
 /// [`Strategy::Paper`] between asks: the loop, then one evaluation at its last iterate.
 struct Paper {
     /// `None` when the budget allows no iteration.
@@ -461,9 +464,18 @@ impl AskTell {
                 samples,
                 lr,
                 sigma0,
-            } => Engine::Paper(Box::new(Paper::new(
-                &options, x0, budget, samples, lr, sigma0,
-            )?)),
+            } => {
+                // The loop's share of the budget; the rest polishes (`Minimizer::polish`).
+                let polish = (budget as f64 * options.polish).floor() as usize;
+                Engine::Paper(Box::new(Paper::new(
+                    &options,
+                    x0,
+                    budget - polish,
+                    samples,
+                    lr,
+                    sigma0,
+                )?))
+            }
         };
         Ok(AskTell {
             budget,
@@ -565,8 +577,26 @@ impl AskTell {
                 n,
             )?,
         };
-        self.result = result;
+        self.result = match result {
+            Some(loop_end) if self.polishes(&loop_end) => {
+                self.engine = Engine::Adaptive(Box::new(Adaptive::polishing(
+                    &self.options,
+                    &self.best.x,
+                    &loop_end,
+                )));
+                None
+            }
+            other => other,
+        };
         Ok(())
+    }
+
+    /// Whether the paper's loop just ended with budget left for the adaptive polish.
+    fn polishes(&self, loop_end: &Minimum) -> bool {
+        matches!(self.engine, Engine::Paper(_))
+            && self.options.polish > 0.0
+            && loop_end.stop == Stop::Budget
+            && self.evaluations < self.budget
     }
 
     /// Whether the run has ended (the next ask gives `None`; [`AskTell::result`] is set).
@@ -675,6 +705,18 @@ impl Adaptive {
             points: Vec::new(),
             seeds: Vec::new(),
         }
+    }
+
+    /// The polish after the paper's loop: a search from the loop's best point `x` whose
+    /// spread starts at the loop's last one, with its own random stream, counting iterations
+    /// on from the loop's.
+    fn polishing(o: &Options, x: &[f64], loop_end: &Minimum) -> Adaptive {
+        let mut start = o.clone();
+        start.sigma0 = Some(loop_end.sigma);
+        start.seed = o.seed ^ POLISH_STREAM;
+        let mut adaptive = Adaptive::new(&start, x);
+        adaptive.iterations = loop_end.iterations;
+        adaptive
     }
 
     /// Draws the next generation into `points` and `seeds`.

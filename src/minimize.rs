@@ -165,6 +165,7 @@ pub(crate) struct Options {
     pub(crate) metric: Metric,
     pub(crate) restart_from_best: bool,
     pub(crate) strategy: Strategy,
+    pub(crate) polish: f64,
 }
 
 impl Default for Options {
@@ -182,6 +183,7 @@ impl Default for Options {
             metric: Metric::Auto,
             restart_from_best: true,
             strategy: Strategy::Adaptive,
+            polish: 0.0,
         }
     }
 }
@@ -201,6 +203,7 @@ impl<F> fmt::Debug for Minimizer<F> {
             .field("flat_growth", &o.flat_growth)
             .field("metric", &o.metric)
             .field("strategy", &o.strategy)
+            .field("polish", &o.polish)
             .finish_non_exhaustive()
     }
 }
@@ -314,6 +317,33 @@ impl<F> Minimizer<F> {
         self
     }
 
+    /// With [`Strategy::Paper`]: spend the last `fraction` of the budget on the adaptive
+    /// search, started at the loop's best point with the loop's last spread (default 0: the
+    /// loop alone).
+    ///
+    /// The paper's annealed loop finds the basin (its large early spread smooths plateaus
+    /// away) but ends where Adam's fixed learning rate and the spread's floor leave it, about
+    /// `lr` from the optimum; the adaptive search shrinks its spread with progress and has no
+    /// floor, so it finishes the descent. On the path-tracing tasks a quarter won
+    /// (`docs/convergence.md`, table 8).
+    ///
+    /// ```
+    /// use plateau::{Minimizer, Strategy};
+    ///
+    /// // A cone, as an image loss is near its optimum: Adam's steps hover around the tip.
+    /// let f = |x: &[f64]| ((x[0] - 0.3).powi(2) + (x[1] + 0.2).powi(2)).sqrt();
+    /// let paper = Strategy::Paper { samples: 2, lr: 0.02, sigma0: 0.5 };
+    /// let polished = Minimizer::new(f).strategy(paper).polish(0.25).budget(800).run(&[1.0, 1.0])?;
+    /// assert!(polished.fun < 1e-5, "{polished:?}");
+    /// assert_eq!(polished.evaluations, 800);
+    /// assert_eq!(polished.evaluations, 800);
+    /// # Ok::<(), plateau::Error>(())
+    /// ```
+    pub fn polish(mut self, fraction: f64) -> Self {
+        self.options.polish = fraction;
+        self
+    }
+
     /// The objective.
     pub fn objective(&self) -> &F {
         &self.objective
@@ -404,6 +434,20 @@ impl Options {
                     });
                 }
             }
+        }
+        if !(0.0..1.0).contains(&self.polish) {
+            return Err(Error::InvalidParameter {
+                name: "polish",
+                value: self.polish,
+                reason: "must be a fraction of the budget in [0, 1)",
+            });
+        }
+        if self.polish > 0.0 && self.strategy == Strategy::Adaptive {
+            return Err(Error::InvalidParameter {
+                name: "polish",
+                value: self.polish,
+                reason: "polishes the paper's loop: it needs Strategy::Paper",
+            });
         }
         if let Strategy::Paper {
             samples,

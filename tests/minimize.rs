@@ -380,3 +380,83 @@ fn full_and_diagonal_metrics_both_work() {
         .unwrap();
     assert!(diag.fun < 1e-12, "{diag:?}");
 }
+
+/// A cone of radius 1 in a plateau: `|x - t|` inside, 1 outside. A rendered edge that moves
+/// changes pixels in proportion to the distance moved, so an image loss near its optimum is
+/// a cone, not a bowl; outside the shadow must overlap its target before the loss feels it.
+fn cone_in_a_plateau(x: &[f64]) -> f64 {
+    let d2 = (x[0] - 0.3).powi(2) + (x[1] + 0.2).powi(2);
+    d2.sqrt().min(1.0)
+}
+
+#[test]
+fn the_polish_finishes_the_papers_loop() {
+    let paper = Strategy::Paper {
+        samples: 2,
+        lr: 0.02,
+        sigma0: 1.0,
+    };
+    // From the plateau (distance 1.6 from the tip): the loop's large spread finds the cone;
+    // Adam's steps of about lr then hover around its tip (the gradient's size does not shrink
+    // there); the polish shrinks its spread with progress and finishes the descent.
+    let start = [1.5, 0.8];
+    for seed in 0..5 {
+        let run = |polish| {
+            Minimizer::new(cone_in_a_plateau)
+                .strategy(paper)
+                .polish(polish)
+                .budget(800)
+                .seed(seed)
+                .run(&start)
+                .unwrap()
+        };
+        let alone = run(0.0);
+        let polished = run(0.25);
+        assert!(alone.fun < 1.0, "seed {seed}: the loop found the cone: {alone:?}");
+        assert!(alone.fun > 1e-6, "seed {seed}: the loop alone hovers: {alone:?}");
+        assert!(polished.fun < 0.1 * alone.fun, "seed {seed}: {polished:?} ({alone:?})");
+        eprintln!("seed {seed}: alone {:e}, polished {:e}", alone.fun, polished.fun);
+        assert_eq!(polished.evaluations, 800);
+        // 600 evaluations: 299 loop iterations and the final one, then the generations.
+        assert!(polished.iterations > 299, "{polished:?}");
+        assert_eq!(polished, run(0.25), "seed {seed}: deterministic");
+    }
+}
+
+#[test]
+fn the_polish_at_tiny_budgets_and_bad_fractions() {
+    let paper = Strategy::Paper {
+        samples: 2,
+        lr: 0.02,
+        sigma0: 1.0,
+    };
+    // Budgets too small for a loop iteration: the final evaluation, then what is left.
+    for budget in 1..6 {
+        let m = Minimizer::new(cone_in_a_plateau)
+            .strategy(paper)
+            .polish(0.5)
+            .budget(budget)
+            .run(&[1.5, 0.8])
+            .unwrap();
+        assert!(m.evaluations <= budget && m.evaluations >= 1, "{m:?}");
+        assert!(m.fun <= 1.0);
+    }
+    for bad in [1.0, -0.1, f64::NAN, f64::INFINITY] {
+        let m = Minimizer::new(cone_in_a_plateau).strategy(paper).polish(bad);
+        assert!(
+            matches!(
+                m.run(&[0.0, 0.0]).unwrap_err(),
+                Error::InvalidParameter { name: "polish", .. }
+            ),
+            "{bad}"
+        );
+    }
+    // The polish belongs to the paper's loop.
+    assert!(matches!(
+        Minimizer::new(cone_in_a_plateau)
+            .polish(0.25)
+            .run(&[0.0, 0.0])
+            .unwrap_err(),
+        Error::InvalidParameter { name: "polish", .. }
+    ));
+}

@@ -135,10 +135,13 @@ pub(super) fn run(args: Args) -> Result<()> {
             "--samples {samples}: antithetic pairs need an even number; allowed: an even count, or add --no-antithetic"
         )));
     }
-    if opts.budget.is_some() && opts.method == Some(Method::Adaptive) {
-        return Err(usage(
-            "--budget with --method adaptive: the time budget applies to the paper's loop only; allowed: drop --budget, or another --method".into(),
-        ));
+    if let (Some(_), Some(method @ (Method::Adaptive | Method::Polished))) =
+        (opts.budget, opts.method)
+    {
+        return Err(usage(format!(
+            "--budget with --method {}: the time budget applies to the paper's loop only; allowed: drop --budget, or another --method",
+            method.as_arg()
+        )));
     }
     let requested = opts.settings(&task);
     let checkpoint = match &resume {

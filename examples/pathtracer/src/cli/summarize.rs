@@ -97,6 +97,7 @@ fn results_row(task: &Task, ours: &[run::Summary], fd: Option<&run::Summary>) ->
         match s.method {
             run::Method::Plateau => format!("paper loop, {:?}", s.sampling).to_lowercase(),
             run::Method::Adaptive => "adaptive search".into(),
+            run::Method::Polished => "paper loop, polished".into(),
             run::Method::Fd => "finite difference".into(),
             run::Method::Spsa => "SPSA".into(),
         },

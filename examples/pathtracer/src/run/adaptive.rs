@@ -1,4 +1,5 @@
-//! `--method adaptive`: the library's [`plateau::Minimizer`] on the task's image loss.
+//! `--method adaptive` and `--method polished`: the library's [`plateau::Minimizer`] on the
+//! task's image loss (polished: its `Strategy::Paper` with `polish`).
 //!
 //! It gets what the paper loop gets and nothing tuned per task: a budget of N x iterations
 //! evaluations (the task's Table 1), the task's sigma0 and box (if any), the run's seed, and
@@ -21,11 +22,15 @@ use std::cell::{Cell, RefCell};
 use std::panic::{self, AssertUnwindSafe};
 use std::time::{Duration, Instant};
 
-use plateau::{Minimizer, Objective, Points};
+use plateau::{Minimizer, Objective, Points, Strategy};
 
-use super::{progress_bar, Ended, Progress, Row, Run};
+use super::{progress_bar, Ended, Method, Progress, Row, Run};
 use crate::report::Result;
 use crate::tasks::param_mse;
+
+/// `--method polished`: the share of the evaluations that the adaptive search gets after the
+/// paper's loop (one value for every task: `docs/convergence.md`, table 8).
+const POLISH: f64 = 0.25;
 
 /// How a run ended, its best point, its history, six snapshots for the progress strip and the
 /// optimisation time: what both methods hand to the outputs.
@@ -98,6 +103,15 @@ where
         .budget(budget)
         .sigma0(s.sigma0)
         .seed(s.seed);
+    if s.method == Method::Polished {
+        minimizer = minimizer
+            .strategy(Strategy::Paper {
+                samples: s.samples,
+                lr: s.lr,
+                sigma0: s.sigma0,
+            })
+            .polish(POLISH);
+    }
     if let Some((lower, upper)) = task.bounds() {
         minimizer = minimizer.bounds(lower, upper);
     }

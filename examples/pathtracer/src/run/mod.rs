@@ -107,7 +107,7 @@ pub fn optimize_with(task: &Task, s: &Settings, ctl: Control<'_>) -> Result<Outc
         saver: &saver,
     };
     let (ended, final_theta, history, snapshots, optimisation_time) =
-        if s.method == Method::Adaptive {
+        if matches!(s.method, Method::Adaptive | Method::Polished) {
             adaptive::run(&run, &loss)?
         } else {
             paper_loop(&run, &loss)?
@@ -392,7 +392,9 @@ where
         ),
         Method::Fd => Box::new(FiniteDifference::new(Seeded(loss), s.fd_step)?.seed(s.seed)),
         Method::Spsa => Box::new(Spsa::new(Seeded(loss)).seed(s.seed)),
-        Method::Adaptive => unreachable!("the adaptive search has no gradient estimator"),
+        Method::Adaptive | Method::Polished => {
+            unreachable!("the library's Minimizer runs these: run::adaptive")
+        }
     })
 }
 

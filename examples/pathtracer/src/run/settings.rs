@@ -30,6 +30,10 @@ pub enum Method {
     /// step-size and covariance adaptation, a plateau rule and restarts from the best point,
     /// given the same evaluations (N x iterations), sigma0, bounds and seed as the paper loop.
     Adaptive,
+    /// The paper's loop (plateau-free gradient, Adam, annealing) on the first three quarters
+    /// of the evaluations, then the adaptive search from its best point at its last spread
+    /// (`plateau::Minimizer::polish(0.25)` with `Strategy::Paper`).
+    Polished,
 }
 
 /// Which renderer seed each evaluation uses.
@@ -128,6 +132,7 @@ impl Method {
             Method::Fd => "fd",
             Method::Spsa => "spsa",
             Method::Adaptive => "adaptive",
+            Method::Polished => "polished",
         }
     }
 }
@@ -139,6 +144,7 @@ impl Settings {
             Method::Fd => "finite difference".into(),
             Method::Spsa => "SPSA".into(),
             Method::Adaptive => "adaptive search".into(),
+            Method::Polished => "paper loop, polished".into(),
             Method::Plateau => {
                 let mut s = format!("{:?}", self.sampling).to_lowercase();
                 if !self.antithetic {
