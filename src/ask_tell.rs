@@ -16,6 +16,9 @@
 //!
 //! A failed `tell` changes nothing: the points still wait for their values (for the one
 //! exception, see [`PaperAskTell::tell`]).
+//!
+//! This file holds [`AskTell`] and what both runs share; `optimizer.rs` holds
+//! [`PaperAskTell`], `adaptive.rs` and `paper.rs` the two engines of [`AskTell`].
 
 use std::fmt;
 

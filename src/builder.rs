@@ -17,7 +17,9 @@
 /// self }` and likewise for the others, each with its documentation. A method that checks
 /// its value or sets more than one field is written out by hand instead.
 macro_rules! setters {
-    ($($(#[$attr:meta])* $name:ident($($arg:ident: $ty:ty),+) => $($field:ident).+ = $value:expr;)*) => {
+    (
+        $($(#[$attr:meta])* $name:ident($($arg:ident: $ty:ty),+) => $($field:ident).+ = $value:expr;)*
+    ) => {
         $(
             $(#[$attr])*
             #[must_use]
