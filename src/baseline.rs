@@ -49,11 +49,9 @@ impl<F: Objective> FiniteDifference<F> {
         })
     }
 
-    /// The seed handed to a seeded objective (the same for both sides of a difference).
-    #[must_use]
-    pub fn seed(mut self, seed: u64) -> Self {
-        self.seed = seed;
-        self
+    setters! {
+        /// The seed handed to a seeded objective (the same for both sides of a difference).
+        seed(seed: u64) => seed = seed;
     }
 }
 
@@ -145,11 +143,9 @@ impl<F: Objective> Spsa<F> {
         }
     }
 
-    /// The seed of the directions and of the objective's seeds.
-    #[must_use]
-    pub fn seed(mut self, seed: u64) -> Self {
-        self.seed = seed;
-        self
+    setters! {
+        /// The seed of the directions and of the objective's seeds.
+        seed(seed: u64) => seed = seed;
     }
 }
 

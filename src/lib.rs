@@ -92,6 +92,10 @@
 
 #![warn(missing_docs, missing_debug_implementations)]
 
+// First: the macros are used by the modules below.
+#[macro_use]
+mod builder;
+
 mod adam;
 mod adaptive;
 mod anneal;

@@ -238,110 +238,72 @@ impl Minimizer<NoObjective> {
 }
 
 impl<F> Minimizer<F> {
-    /// The number of evaluations of `f` the run may spend (default: `1000 n`).
-    pub fn budget(mut self, budget: usize) -> Self {
-        self.options.budget = Some(budget);
-        self
-    }
+    setters! {
+        /// The number of evaluations of `f` the run may spend (default: `1000 n`).
+        budget(budget: usize) => options.budget = Some(budget);
 
-    /// The seed of every random choice (default 0).
-    pub fn seed(mut self, seed: u64) -> Self {
-        self.options.seed = seed;
-        self
-    }
+        /// The seed of every random choice (default 0).
+        seed(seed: u64) => options.seed = seed;
 
-    /// The starting spread, in the units of `x` (default: a quarter of the mean box width
-    /// with [`Minimizer::bounds`], else `max(1, max |x0_i|) / 2`). It adapts from there: a
-    /// poor guess costs evaluations, not the result.
-    pub fn sigma0(mut self, sigma0: f64) -> Self {
-        self.options.sigma0 = Some(sigma0);
-        self
-    }
+        /// The starting spread, in the units of `x` (default: a quarter of the mean box width
+        /// with [`Minimizer::bounds`], else `max(1, max |x0_i|) / 2`). It adapts from there: a
+        /// poor guess costs evaluations, not the result.
+        sigma0(sigma0: f64) => options.sigma0 = Some(sigma0);
 
-    /// A box: every evaluated point is projected onto it, and restarts stay inside it.
-    pub fn bounds(mut self, lower: Vec<f64>, upper: Vec<f64>) -> Self {
-        self.options.bounds = Some((lower, upper));
-        self
-    }
+        /// A box: every evaluated point is projected onto it, and restarts stay inside it.
+        bounds(lower: Vec<f64>, upper: Vec<f64>) => options.bounds = Some((lower, upper));
 
-    /// Stop as soon as `f` reaches `target` or below.
-    pub fn target(mut self, target: f64) -> Self {
-        self.options.target = Some(target);
-        self
-    }
+        /// Stop as soon as `f` reaches `target` or below.
+        target(target: f64) => options.target = Some(target);
 
-    /// The population of the first run (default `4 + floor(3 ln n)`); each restart doubles it.
-    pub fn population(mut self, population: usize) -> Self {
-        self.options.population = Some(population);
-        self
-    }
+        /// The population of the first run (default `4 + floor(3 ln n)`); each restart doubles it.
+        population(population: usize) => options.population = Some(population);
 
-    /// Whether a run that converged or stalled restarts from the best point with a doubled
-    /// population while budget remains (default: yes). Off, the run ends with
-    /// [`Stop::Converged`].
-    pub fn restarts(mut self, restarts: bool) -> Self {
-        self.options.restarts = restarts;
-        self
-    }
+        /// Whether a run that converged or stalled restarts from the best point with a doubled
+        /// population while budget remains (default: yes). Off, the run ends with
+        /// [`Stop::Converged`].
+        restarts(restarts: bool) => options.restarts = restarts;
 
-    /// Mirrored (antithetic) draws, `y` and `-y`, as the paper's antithetic pairs (default:
-    /// on; it won on Rastrigin and Rosenbrock, see `docs/convergence.md`).
-    pub fn mirrored(mut self, mirrored: bool) -> Self {
-        self.options.mirrored = mirrored;
-        self
-    }
+        /// Mirrored (antithetic) draws, `y` and `-y`, as the paper's antithetic pairs (default:
+        /// on; it won on Rastrigin and Rosenbrock, see `docs/convergence.md`).
+        mirrored(mirrored: bool) => options.mirrored = mirrored;
 
-    /// Whether the spread grows on generations where half the points tie with the best
-    /// (default: yes; the plateau rule).
-    pub fn flat_growth(mut self, flat_growth: bool) -> Self {
-        self.options.flat_growth = flat_growth;
-        self
-    }
+        /// Whether the spread grows on generations where half the points tie with the best
+        /// (default: yes; the plateau rule).
+        flat_growth(flat_growth: bool) => options.flat_growth = flat_growth;
 
-    /// Whether restarts start from the best point seen (default) or from `x0`.
-    pub fn restart_from_best(mut self, from_best: bool) -> Self {
-        self.options.restart_from_best = from_best;
-        self
-    }
+        /// Whether restarts start from the best point seen (default) or from `x0`.
+        restart_from_best(from_best: bool) => options.restart_from_best = from_best;
 
-    /// The metric the search distribution learns (default [`Metric::Auto`]).
-    pub fn metric(mut self, metric: Metric) -> Self {
-        self.options.metric = metric;
-        self
-    }
+        /// The metric the search distribution learns (default [`Metric::Auto`]).
+        metric(metric: Metric) => options.metric = metric;
 
-    /// The search method; [`Strategy::Paper`] runs the paper's loop (annealer and Adam) with
-    /// the same budget, seed and bounds.
-    pub fn strategy(mut self, strategy: Strategy) -> Self {
-        self.options.strategy = strategy;
-        self
-    }
+        /// The search method; [`Strategy::Paper`] runs the paper's loop (annealer and Adam) with
+        /// the same budget, seed and bounds.
+        strategy(strategy: Strategy) => options.strategy = strategy;
 
-    /// With [`Strategy::Paper`]: spend the last `fraction` of the budget on the adaptive
-    /// search, started at the loop's best point with the loop's last spread (default 0: the
-    /// loop alone).
-    ///
-    /// The paper's annealed loop finds the basin (its large early spread smooths plateaus
-    /// away) but ends where Adam's fixed learning rate and the spread's floor leave it, about
-    /// `lr` from the optimum; the adaptive search shrinks its spread with progress and has no
-    /// floor, so it finishes the descent. On the path-tracing tasks a quarter won
-    /// (`docs/convergence.md`, table 8).
-    ///
-    /// ```
-    /// use plateau::{Minimizer, Strategy};
-    ///
-    /// // A cone, as an image loss is near its optimum: Adam's steps hover around the tip.
-    /// let f = |x: &[f64]| ((x[0] - 0.3).powi(2) + (x[1] + 0.2).powi(2)).sqrt();
-    /// let paper = Strategy::Paper { samples: 2, lr: 0.02, sigma0: 0.5 };
-    /// let polished = Minimizer::new(f).strategy(paper).polish(0.25).budget(800).run(&[1.0, 1.0])?;
-    /// assert!(polished.fun < 1e-5, "{polished:?}");
-    /// assert_eq!(polished.evaluations, 800);
-    /// assert_eq!(polished.evaluations, 800);
-    /// # Ok::<(), plateau::Error>(())
-    /// ```
-    pub fn polish(mut self, fraction: f64) -> Self {
-        self.options.polish = fraction;
-        self
+        /// With [`Strategy::Paper`]: spend the last `fraction` of the budget on the adaptive
+        /// search, started at the loop's best point with the loop's last spread (default 0: the
+        /// loop alone).
+        ///
+        /// The paper's annealed loop finds the basin (its large early spread smooths plateaus
+        /// away) but ends where Adam's fixed learning rate and the spread's floor leave it, about
+        /// `lr` from the optimum; the adaptive search shrinks its spread with progress and has no
+        /// floor, so it finishes the descent. On the path-tracing tasks a quarter won
+        /// (`docs/convergence.md`, table 8).
+        ///
+        /// ```
+        /// use plateau::{Minimizer, Strategy};
+        ///
+        /// // A cone, as an image loss is near its optimum: Adam's steps hover around the tip.
+        /// let f = |x: &[f64]| ((x[0] - 0.3).powi(2) + (x[1] + 0.2).powi(2)).sqrt();
+        /// let paper = Strategy::Paper { samples: 2, lr: 0.02, sigma0: 0.5 };
+        /// let polished = Minimizer::new(f).strategy(paper).polish(0.25).budget(800).run(&[1.0, 1.0])?;
+        /// assert!(polished.fun < 1e-5, "{polished:?}");
+        /// assert_eq!(polished.evaluations, 800);
+        /// # Ok::<(), plateau::Error>(())
+        /// ```
+        polish(fraction: f64) => options.polish = fraction;
     }
 
     /// The objective.

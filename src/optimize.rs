@@ -235,21 +235,15 @@ impl Optimizer {
         }
     }
 
-    /// Runs a different number of iterations than the annealer spans (past its end, sigma
-    /// stays at its final value).
-    #[must_use]
-    pub fn iterations(mut self, iterations: usize) -> Self {
-        self.iterations = iterations;
-        self
-    }
+    setters! {
+        /// Runs a different number of iterations than the annealer spans (past its end, sigma
+        /// stays at its final value).
+        iterations(iterations: usize) => iterations = iterations;
 
-    /// Whether the history keeps theta for every iteration (default: no, since it costs `8n`
-    /// bytes an iteration: 80 MB per 10 iterations at `n = 10^6`). The last theta is always
-    /// kept, overwritten in place.
-    #[must_use]
-    pub fn record_theta(mut self, record: bool) -> Self {
-        self.record_theta = record;
-        self
+        /// Whether the history keeps theta for every iteration (default: no, since it costs `8n`
+        /// bytes an iteration: 80 MB per 10 iterations at `n = 10^6`). The last theta is always
+        /// kept, overwritten in place.
+        record_theta(record: bool) => record_theta = record;
     }
 
     /// The optimiser (with its moment estimates after a run).

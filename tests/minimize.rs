@@ -412,10 +412,22 @@ fn the_polish_finishes_the_papers_loop() {
         };
         let alone = run(0.0);
         let polished = run(0.25);
-        assert!(alone.fun < 1.0, "seed {seed}: the loop found the cone: {alone:?}");
-        assert!(alone.fun > 1e-6, "seed {seed}: the loop alone hovers: {alone:?}");
-        assert!(polished.fun < 0.1 * alone.fun, "seed {seed}: {polished:?} ({alone:?})");
-        eprintln!("seed {seed}: alone {:e}, polished {:e}", alone.fun, polished.fun);
+        assert!(
+            alone.fun < 1.0,
+            "seed {seed}: the loop found the cone: {alone:?}"
+        );
+        assert!(
+            alone.fun > 1e-6,
+            "seed {seed}: the loop alone hovers: {alone:?}"
+        );
+        assert!(
+            polished.fun < 0.1 * alone.fun,
+            "seed {seed}: {polished:?} ({alone:?})"
+        );
+        eprintln!(
+            "seed {seed}: alone {:e}, polished {:e}",
+            alone.fun, polished.fun
+        );
         assert_eq!(polished.evaluations, 800);
         // 600 evaluations: 299 loop iterations and the final one, then the generations.
         assert!(polished.iterations > 299, "{polished:?}");
@@ -442,7 +454,9 @@ fn the_polish_at_tiny_budgets_and_bad_fractions() {
         assert!(m.fun <= 1.0);
     }
     for bad in [1.0, -0.1, f64::NAN, f64::INFINITY] {
-        let m = Minimizer::new(cone_in_a_plateau).strategy(paper).polish(bad);
+        let m = Minimizer::new(cone_in_a_plateau)
+            .strategy(paper)
+            .polish(bad);
         assert!(
             matches!(
                 m.run(&[0.0, 0.0]).unwrap_err(),

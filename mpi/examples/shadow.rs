@@ -27,7 +27,7 @@ use mpi::traits::Communicator;
 use mpi::Threading;
 use pathtracer::run::{self, Crn, Settings};
 use pathtracer::tasks::{self, param_mse, Task};
-use plateau::{Adam, Annealer, Optimizer, PlateauFreeGradient, Seeded};
+use plateau::{PlateauFreeGradient, Seeded};
 use plateau_mpi::Wait;
 
 /// The command line: the settings, and whether to check against the sequential run.
@@ -84,25 +84,14 @@ fn optimize<O: plateau::Objective>(
     task: &Task,
     s: &Settings,
     objective: O,
-) -> Result<Vec<f64>, plateau::Error> {
+) -> pathtracer::report::Result<Vec<f64>> {
     let mut estimator = PlateauFreeGradient::new(objective)
         .samples(s.samples)
         .sampling(s.sampling)
         .antithetic(s.antithetic)
         .seed(s.seed);
-    let mut adam = Adam::new(s.lr)?;
-    if let Some((lower, upper)) = task.bounds() {
-        adam = adam.bounds(lower, upper)?;
-    }
-    let annealer = if s.anneal {
-        Annealer::paper(s.sigma0, s.iterations)?
-    } else {
-        Annealer::constant(s.sigma0, s.iterations)?
-    };
     let start = task.start();
-    let history = Optimizer::new(adam, annealer)
-        .record_theta(false)
-        .minimize(&mut estimator, &start)?;
+    let history = run::optimizer(task, s)?.minimize(&mut estimator, &start)?;
     Ok(history.last_theta().unwrap_or(&start).to_vec())
 }
 

@@ -158,15 +158,33 @@ def plot_convergence(path: Path, runs: list[tuple[str, list[dict], dict]], title
 # --------------------------------------------------------------------------------------
 # 1. plateau on Mitsuba.
 
-def run_plateau(mi, args, seed: int, out: Path) -> dict:
-    import numpy as np
-
-    minimize, optimiser = load_optimiser(args.standin)
+def start_images(mi, args, seed: int, out: Path):
+    """The run's scene, its target image (the reference) and its start image, both written
+    as PNGs into ``out``."""
     scene = ms.ShadowScene(mi, spp=args.spp, scale=args.scale)
     reference = scene.render(ms.TARGET, seed)
     initial = scene.render(ms.START, seed)
     write_png(mi, reference, out / "target.png")
     write_png(mi, initial, out / "initial.png")
+    return scene, reference, initial
+
+
+def finish_images(mi, scene, final_theta, seed: int, rows: list[dict], out: Path):
+    """The final image (written as final.png, with the run's history.csv) and the image MSE
+    of the final parameters rendered with another seed, against the target with that seed."""
+    final = scene.render(final_theta, seed)
+    write_png(mi, final, out / "final.png")
+    other = seed + 0x5EED
+    image_mse_other_seed = ms.image_mse(scene.render(final_theta, other), scene.render(ms.TARGET, other))
+    write_csv(out / "history.csv", rows)
+    return final, image_mse_other_seed
+
+
+def run_plateau(mi, args, seed: int, out: Path) -> dict:
+    import numpy as np
+
+    minimize, optimiser = load_optimiser(args.standin)
+    scene, reference, initial = start_images(mi, args, seed, out)
 
     calls: list[tuple[np.ndarray, float, float]] = []  # (theta, loss, time)
     t0 = [0.0]
@@ -228,11 +246,7 @@ def run_plateau(mi, args, seed: int, out: Path) -> dict:
     for r in rows:
         if r["iteration"] % args.eval_every == 0:
             r["image_mse"] = ms.image_mse(scene.render((r["theta0"], r["theta1"]), seed), reference)
-    final = scene.render(final_theta, seed)
-    write_png(mi, final, out / "final.png")
-    other = seed + 0x5EED
-    image_mse_other_seed = ms.image_mse(scene.render(final_theta, other), scene.render(ms.TARGET, other))
-    write_csv(out / "history.csv", rows)
+    final, image_mse_other_seed = finish_images(mi, scene, final_theta, seed, rows, out)
     return {
         "optimiser": optimiser,
         "nit": nit,
@@ -282,11 +296,7 @@ def run_adaptive(mi, args, seed: int, out: Path) -> dict:
         sys.exit("--method adaptive needs the Python package plateau: `pip install ./python` "
                  "(the numpy stand-in has only the paper's loop)")
     optimiser = "plateau " + str(getattr(plateau, "__version__", "")).strip()
-    scene = ms.ShadowScene(mi, spp=args.spp, scale=args.scale)
-    reference = scene.render(ms.TARGET, seed)
-    initial = scene.render(ms.START, seed)
-    write_png(mi, reference, out / "target.png")
-    write_png(mi, initial, out / "initial.png")
+    scene, reference, initial = start_images(mi, args, seed, out)
     budget = args.samples * args.iterations
 
     # Per generation: its points, values and the optimisation time at its end (renders and the
@@ -349,11 +359,7 @@ def run_adaptive(mi, args, seed: int, out: Path) -> dict:
     for r in rows:
         if r.pop("_measure"):
             r["image_mse"] = ms.image_mse(scene.render((r["theta0"], r["theta1"]), seed), reference)
-    final = scene.render(final_theta, seed)
-    write_png(mi, final, out / "final.png")
-    other = seed + 0x5EED
-    image_mse_other_seed = ms.image_mse(scene.render(final_theta, other), scene.render(ms.TARGET, other))
-    write_csv(out / "history.csv", rows)
+    final, image_mse_other_seed = finish_images(mi, scene, final_theta, seed, rows, out)
     nit = int(result.nit)
     nfev = int(result.nfev)
     return {

@@ -260,6 +260,29 @@ def _adaptive_bounds(
     return box
 
 
+def _adaptive_options(
+    budget: Optional[int],
+    seed: int,
+    sigma0: Optional[float],
+    bounds: Any,
+    target: Optional[float],
+    population: Optional[int],
+    restarts: bool,
+    shape: tuple[int, ...],
+) -> _plateau._AdaptiveOptions:
+    """The options of ``method='adaptive'`` as the Rust side takes them, the same for
+    :func:`minimize` and :func:`ask_tell`."""
+    return {
+        "budget": None if budget is None else int(budget),
+        "seed": seed,
+        "sigma0": sigma0,
+        "bounds": _adaptive_bounds(bounds, shape),
+        "target": target,
+        "population": population,
+        "restarts": restarts,
+    }
+
+
 def _choose_method(
     method: Optional[str],
     budget: Optional[int],
@@ -577,19 +600,11 @@ def minimize(
                 "checkpoint: supported by the paper's loop (method='plateau', 'fd' or 'spsa'); "
                 "method='adaptive' keeps its state inside the Rust Minimizer"
             )
+        options = _adaptive_options(
+            budget, seed, sigma0, bounds, target, population, restarts, x0_array.shape
+        )
         return _minimize_adaptive(
-            fun,
-            x0_array,
-            budget=budget,
-            seed=seed,
-            sigma0=sigma0,
-            bounds=bounds,
-            target=target,
-            population=population,
-            restarts=restarts,
-            batched=batched,
-            seeded=seeded,
-            callback=callback,
+            fun, x0_array, options, batched=batched, seeded=seeded, callback=callback
         )
     o = _PaperOptions.given(sigma0, paper_only)
     if chosen == "plateau":
@@ -685,14 +700,8 @@ def minimize(
 def _minimize_adaptive(
     fun: Callable[..., Any],
     x0: np.ndarray,
+    options: _plateau._AdaptiveOptions,
     *,
-    budget: Optional[int],
-    seed: int,
-    sigma0: Optional[float],
-    bounds: Any,
-    target: Optional[float],
-    population: Optional[int],
-    restarts: bool,
     batched: bool,
     seeded: bool,
     callback: Optional[Callable[..., Any]],
@@ -709,18 +718,7 @@ def _minimize_adaptive(
             return callback(x) is True
 
     raw = _plateau._minimize_adaptive(
-        fun,
-        x0,
-        budget=None if budget is None else int(budget),
-        seed=seed,
-        sigma0=sigma0,
-        bounds=_adaptive_bounds(bounds, x0.shape),
-        target=target,
-        population=population,
-        restarts=restarts,
-        batched=batched,
-        seeded=seeded,
-        callback=raw_callback,
+        fun, x0, options, batched=batched, seeded=seeded, callback=raw_callback
     )
     return _adaptive_result(raw)
 
@@ -897,16 +895,10 @@ def ask_tell(
     }
     chosen = _choose_method(method, budget, sigma0, paper_only)
     if chosen == "adaptive":
-        raw = _plateau._AskTell.adaptive(
-            x0_array,
-            budget=None if budget is None else int(budget),
-            seed=seed,
-            sigma0=sigma0,
-            bounds=_adaptive_bounds(bounds, x0_array.shape),
-            target=target,
-            population=population,
-            restarts=restarts,
+        options = _adaptive_options(
+            budget, seed, sigma0, bounds, target, population, restarts, x0_array.shape
         )
+        raw = _plateau._AskTell.adaptive(x0_array, options)
         return AskTell(raw, "adaptive")
     if chosen not in ("plateau", "paper"):
         raise ValueError(

@@ -1,7 +1,7 @@
 """Type stubs of the Rust extension module ``plateau._plateau``; its public names are
 re-exported by ``plateau`` (whose own code, ``__init__.py``, is typed inline)."""
 
-from typing import Any, Callable, Literal, Optional, Sequence, Tuple, Union, final
+from typing import Any, Callable, Literal, Optional, Sequence, Tuple, TypedDict, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -177,20 +177,23 @@ __all__ = [
     "_rust_seconds_per_evaluation",
 ]
 
+class _AdaptiveOptions(TypedDict):
+    """The options of ``method='adaptive'``: the dict that ``plateau._adaptive_options`` makes,
+    every key given. A name of the stubs alone (the extension takes a plain dict)."""
+
+    budget: int | None
+    seed: int
+    sigma0: float | None
+    bounds: tuple[list[float], list[float]] | None
+    target: float | None
+    population: int | None
+    restarts: bool
+
 class _AskTell:
     """The Rust side of ``plateau.AskTell``: an adaptive or paper-loop run, asked and told."""
 
     @staticmethod
-    def adaptive(
-        x0: Any,
-        budget: int | None = None,
-        seed: int = 0,
-        sigma0: float | None = None,
-        bounds: tuple[list[float], list[float]] | None = None,
-        target: float | None = None,
-        population: int | None = None,
-        restarts: bool = True,
-    ) -> _AskTell: ...
+    def adaptive(x0: Any, options: _AdaptiveOptions) -> _AskTell: ...
     @staticmethod
     def paper(
         x0: Any,
@@ -229,13 +232,7 @@ def _minimize(
 def _minimize_adaptive(
     fun: Any,
     x0: Any,
-    budget: int | None = None,
-    seed: int = 0,
-    sigma0: float | None = None,
-    bounds: tuple[list[float], list[float]] | None = None,
-    target: float | None = None,
-    population: int | None = None,
-    restarts: bool = True,
+    options: _AdaptiveOptions,
     batched: bool = False,
     seeded: bool = False,
     callback: Any = None,

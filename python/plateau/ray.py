@@ -20,9 +20,10 @@ import operator
 import os
 import threading
 import time
-from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple
+from typing import Any, Callable, Dict, List, Mapping, Optional, Set, Tuple, Type
 
 import numpy as np
+import numpy.typing as npt
 
 __all__ = ["RayEvaluator", "WorkerLostError"]
 
@@ -66,7 +67,7 @@ def _import_ray() -> Any:
     return ray
 
 
-def _lost_worker_errors(ray: Any) -> Tuple[type, ...]:
+def _lost_worker_errors(ray: Any) -> Tuple[Type[BaseException], ...]:
     """The exceptions that mean "the actor (or its node, or the result) is gone", as opposed to
     an exception raised by ``fun`` (``RayTaskError``), which is re-raised."""
     names = ["RayActorError", "WorkerCrashedError", "NodeDiedError", "ObjectLostError", "LocalRayletDiedError"]
@@ -266,7 +267,7 @@ class RayEvaluator:
 
     # -- evaluation -------------------------------------------------------------------------
 
-    def __call__(self, X: Any, seeds: Any = None) -> np.ndarray:
+    def __call__(self, X: npt.ArrayLike, seeds: Optional[npt.ArrayLike] = None) -> npt.NDArray[np.float64]:
         """The values of the rows of ``X`` (and their ``seeds``), in order, as float64."""
         if self._closed:
             raise ValueError("this RayEvaluator is closed")
@@ -292,7 +293,7 @@ class RayEvaluator:
         running: Dict[Any, Tuple[int, int, Any]] = {}
         # ObjectRef of ready() -> (slot, actor, since): replacements still running make_fun.
         starting: Dict[Any, Tuple[int, Any, float]] = {}
-        starting_slots: set = set()
+        starting_slots: Set[int] = set()
         # Two tasks per actor: the next chunk is already at the actor when one finishes.
         depth = 2
 

@@ -76,23 +76,16 @@ pub(crate) fn stop_name(stop: Stop) -> String {
 pub(crate) type Bounds = (Vec<f64>, Vec<f64>);
 
 /// `plateau::Minimizer` on a Python objective, the GIL released: what `plateau.minimize` runs
-/// for `method='adaptive'`. `callback(nit, best_x, best_fun, nfev)` runs after every iteration;
+/// for `method='adaptive'`, with the options of [`AdaptiveOptions`]. `callback(nit, best_x, best_fun, nfev)` runs after every iteration;
 /// a truthy return stops the run (then `restarts` and `sigma` are None). Returns a dict of raw
 /// results.
 #[pyfunction]
-#[pyo3(signature = (fun, x0, budget=None, seed=0, sigma0=None, bounds=None, target=None, population=None, restarts=true, batched=false, seeded=false, callback=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (fun, x0, options, batched=false, seeded=false, callback=None))]
 pub(crate) fn _minimize_adaptive<'py>(
     py: Python<'py>,
     fun: Py<PyAny>,
     x0: &Bound<'py, PyAny>,
-    budget: Option<usize>,
-    seed: u64,
-    sigma0: Option<f64>,
-    bounds: Option<Bounds>,
-    target: Option<f64>,
-    population: Option<usize>,
-    restarts: bool,
+    options: AdaptiveOptions,
     batched: bool,
     seeded: bool,
     callback: Option<Py<PyAny>>,
@@ -111,22 +104,7 @@ pub(crate) fn _minimize_adaptive<'py>(
         nfev: AtomicU64::new(0),
         stopped: AtomicBool::new(false),
     };
-    let mut minimizer = RsMinimizer::new(objective).seed(seed).restarts(restarts);
-    if let Some(b) = budget {
-        minimizer = minimizer.budget(b);
-    }
-    if let Some(s) = sigma0 {
-        minimizer = minimizer.sigma0(s);
-    }
-    if let Some((lower, upper)) = bounds {
-        minimizer = minimizer.bounds(lower, upper);
-    }
-    if let Some(t) = target {
-        minimizer = minimizer.target(t);
-    }
-    if let Some(p) = population {
-        minimizer = minimizer.population(p);
-    }
+    let minimizer = options.apply(RsMinimizer::new(objective));
     let result = py.detach(|| minimizer.run(&theta));
     if let Some(err) = shared.take() {
         return Err(err);

@@ -100,24 +100,9 @@ impl Paper {
 impl PyAskTell {
     /// The adaptive search (`plateau.minimize`'s default method) from `x0`.
     #[staticmethod]
-    #[pyo3(signature = (x0, budget=None, seed=0, sigma0=None, bounds=None, target=None, population=None, restarts=true))]
-    #[allow(clippy::too_many_arguments)]
-    fn adaptive(
-        py: Python<'_>,
-        x0: &Bound<'_, PyAny>,
-        budget: Option<usize>,
-        seed: u64,
-        sigma0: Option<f64>,
-        bounds: Option<Bounds>,
-        target: Option<f64>,
-        population: Option<usize>,
-        restarts: bool,
-    ) -> PyResult<Self> {
+    fn adaptive(py: Python<'_>, x0: &Bound<'_, PyAny>, options: AdaptiveOptions) -> PyResult<Self> {
         let (theta, shape) = to_vector(py, x0, "x0")?;
-        let minimizer = RsMinimizer::without_objective()
-            .seed(seed)
-            .restarts(restarts);
-        let minimizer = adaptive_options(minimizer, budget, sigma0, bounds, target, population);
+        let minimizer = options.apply(RsMinimizer::without_objective());
         let run = minimizer.ask_tell(&theta).map_err(value_error)?;
         Ok(PyAskTell {
             run: Run::Adaptive(Box::new(run)),

@@ -42,22 +42,33 @@ pub(crate) fn maybe<B, V>(builder: B, value: Option<V>, set: impl FnOnce(B, V) -
     }
 }
 
-/// `minimizer` with the options of `plateau.minimize(method='adaptive')` that were given.
-pub(crate) fn adaptive_options<F>(
-    minimizer: RsMinimizer<F>,
+/// The options of the adaptive search, the same for `plateau.minimize(method='adaptive')`
+/// and `plateau.ask_tell`: the dict that `plateau._adaptive_options` makes (a missing key is
+/// a TypeError naming it).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub(crate) struct AdaptiveOptions {
     budget: Option<usize>,
+    seed: u64,
     sigma0: Option<f64>,
     bounds: Option<Bounds>,
     target: Option<f64>,
     population: Option<usize>,
-) -> RsMinimizer<F> {
-    let minimizer = maybe(minimizer, budget, RsMinimizer::budget);
-    let minimizer = maybe(minimizer, sigma0, RsMinimizer::sigma0);
-    let minimizer = maybe(minimizer, bounds, |m, (lower, upper)| {
-        m.bounds(lower, upper)
-    });
-    let minimizer = maybe(minimizer, target, RsMinimizer::target);
-    maybe(minimizer, population, RsMinimizer::population)
+    restarts: bool,
+}
+
+impl AdaptiveOptions {
+    /// `minimizer` with these options; those given as None keep the Minimizer's defaults.
+    pub(crate) fn apply<F>(self, minimizer: RsMinimizer<F>) -> RsMinimizer<F> {
+        let minimizer = minimizer.seed(self.seed).restarts(self.restarts);
+        let minimizer = maybe(minimizer, self.budget, RsMinimizer::budget);
+        let minimizer = maybe(minimizer, self.sigma0, RsMinimizer::sigma0);
+        let minimizer = maybe(minimizer, self.bounds, |m, (lower, upper)| {
+            m.bounds(lower, upper)
+        });
+        let minimizer = maybe(minimizer, self.target, RsMinimizer::target);
+        maybe(minimizer, self.population, RsMinimizer::population)
+    }
 }
 
 /// A spread: one number, or one per coordinate.

@@ -25,14 +25,30 @@ use super::*;
 pub(crate) struct PyPlateauFreeGradient {
     pub(crate) inner: RsPlateauFreeGradient<PyObjective>,
     pub(crate) shared: Arc<Shared>,
+    /// The objective.
+    #[pyo3(get)]
     pub(crate) fun: Py<PyAny>,
+    /// Evaluations of `fun` per estimate.
+    #[pyo3(get)]
     pub(crate) samples: usize,
     pub(crate) sampling: Sampling,
+    /// Whether perturbations come in antithetic pairs.
+    #[pyo3(get)]
     pub(crate) antithetic: bool,
+    /// The seed.
+    #[pyo3(get)]
     pub(crate) seed: u64,
+    /// Whether `fun` takes a whole batch.
+    #[pyo3(get)]
     pub(crate) batched: bool,
+    /// Whether `fun` takes a seed.
+    #[pyo3(get)]
     pub(crate) seeded: bool,
+    /// Whether the directions of one estimate are orthogonal.
+    #[pyo3(get)]
     pub(crate) orthogonal: bool,
+    /// Whether the evaluations of one estimate run on several threads.
+    #[pyo3(get)]
     pub(crate) parallel: bool,
 }
 
@@ -107,50 +123,10 @@ impl PyPlateauFreeGradient {
         self.inner.reset();
     }
 
-    /// The objective.
-    #[getter]
-    pub(crate) fn fun(&self, py: Python<'_>) -> Py<PyAny> {
-        self.fun.clone_ref(py)
-    }
-    /// Evaluations of `fun` per estimate.
-    #[getter]
-    pub(crate) fn samples(&self) -> usize {
-        self.samples
-    }
     /// The sampler: 'radial', 'per_coordinate' or 'gaussian'.
     #[getter]
     pub(crate) fn sampling(&self) -> &'static str {
         sampling_name(self.sampling)
-    }
-    /// Whether perturbations come in antithetic pairs.
-    #[getter]
-    pub(crate) fn antithetic(&self) -> bool {
-        self.antithetic
-    }
-    /// The seed.
-    #[getter]
-    pub(crate) fn seed(&self) -> u64 {
-        self.seed
-    }
-    /// Whether `fun` takes a whole batch.
-    #[getter]
-    pub(crate) fn batched(&self) -> bool {
-        self.batched
-    }
-    /// Whether `fun` takes a seed.
-    #[getter]
-    pub(crate) fn seeded(&self) -> bool {
-        self.seeded
-    }
-    /// Whether the directions of one estimate are orthogonal.
-    #[getter]
-    pub(crate) fn orthogonal(&self) -> bool {
-        self.orthogonal
-    }
-    /// Whether the evaluations of one estimate run on several threads.
-    #[getter]
-    pub(crate) fn parallel(&self) -> bool {
-        self.parallel
     }
     /// Estimates made since construction or the last `reset()`.
     #[getter]
@@ -183,7 +159,11 @@ impl PyPlateauFreeGradient {
 pub(crate) struct PyFiniteDifference {
     pub(crate) inner: RsFiniteDifference<PyObjective>,
     pub(crate) shared: Arc<Shared>,
+    /// The step h.
+    #[pyo3(get)]
     pub(crate) step: f64,
+    /// The seed handed to a seeded `fun`.
+    #[pyo3(get)]
     pub(crate) seed: u64,
 }
 
@@ -226,16 +206,6 @@ impl PyFiniteDifference {
         estimate_shaped(py, &self.shared, x, |theta| inner.estimate(theta, 1.0))
     }
 
-    /// The step h.
-    #[getter]
-    pub(crate) fn step(&self) -> f64 {
-        self.step
-    }
-    /// The seed handed to a seeded `fun`.
-    #[getter]
-    pub(crate) fn seed(&self) -> u64 {
-        self.seed
-    }
     /// Evaluations of `fun` since construction.
     #[getter]
     pub(crate) fn nfev(&self) -> u64 {
@@ -252,6 +222,8 @@ impl PyFiniteDifference {
 pub(crate) struct PySpsa {
     pub(crate) inner: RsSpsa<PyObjective>,
     pub(crate) shared: Arc<Shared>,
+    /// The seed.
+    #[pyo3(get)]
     pub(crate) seed: u64,
 }
 
@@ -286,11 +258,6 @@ impl PySpsa {
         estimate_shaped(py, &self.shared, x, |theta| inner.estimate(theta, sigma))
     }
 
-    /// The seed.
-    #[getter]
-    pub(crate) fn seed(&self) -> u64 {
-        self.seed
-    }
     /// Evaluations of `fun` since construction.
     #[getter]
     pub(crate) fn nfev(&self) -> u64 {

@@ -121,7 +121,9 @@ pub(crate) fn _rust_reference_minimize_adaptive<'py>(
     macro_rules! run {
         ($objective:expr) => {{
             let m = RsMinimizer::new($objective).seed(seed);
-            let m = adaptive_options(m, budget, sigma0, bounds, None, None);
+            let m = maybe(m, budget, RsMinimizer::budget);
+            let m = maybe(m, sigma0, RsMinimizer::sigma0);
+            let m = maybe(m, bounds, |m, (lower, upper)| m.bounds(lower, upper));
             m.run(&x0).map_err(value_error)?
         }};
     }

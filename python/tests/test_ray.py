@@ -25,6 +25,7 @@ import pytest
 import ray
 
 import plateau
+from helpers import bumpy_seeded  # a quadratic, a step and "render noise"
 from plateau.ray import RayEvaluator, WorkerLostError
 
 COST = 0.2  # seconds per evaluation of the slow objective
@@ -32,17 +33,6 @@ SAMPLES = 8
 X0 = np.array([0.3, -0.2, 0.7, 0.1])
 SIGMA = 0.4
 SEED = 11
-
-
-def bumpy_seeded(x, seed):
-    """A deterministic function of x and the seed: a quadratic, a step, 'render noise'."""
-    total = 0.0
-    for i, v in enumerate(x):
-        d = float(v) - 0.1 * i
-        total += (i + 1.0) * d * d
-    if float(x[0]) + 2.0 * float(x[-1]) > 0.3:
-        total += 1.0
-    return total + (seed % 1000) * 1e-3
 
 
 def slow_objective(marker_dir=None):

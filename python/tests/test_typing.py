@@ -1,4 +1,4 @@
-"""The package's types hold together: ``__init__.py`` is typed inline, the extension by
+"""The package's types hold together: ``__init__.py`` and ``ray.py`` are typed inline, the extension by
 ``_plateau.pyi``, and mypy in strict mode checks the one against the other."""
 
 import os

@@ -5,7 +5,6 @@ use std::path::{Path, PathBuf};
 
 use super::{summarize, values, with_threads};
 use crate::report::Result;
-use crate::run::interrupt::Interrupted;
 use crate::run::{self, checkpoint, Control, Earlier, Every, Method, Settings};
 use crate::tasks::{self, Task};
 
@@ -69,11 +68,12 @@ struct Limits {
 
 /// Runs `task` with `s` into `dir`, unless `dir` holds the finished run of these settings
 /// (kept); continues it if `dir` holds its unfinished run. An interrupted run returns
-/// [`Interrupted`] (the command line then exits 130; the same command continues).
+/// [`Interrupted`](crate::run::interrupt::Interrupted) (the command line then exits 130; the same command continues).
 fn run_in(task: &Task, s: &Settings, dir: &Path, limits: &Limits) -> Result<()> {
     let path = dir.join(checkpoint::FILE);
-    let resume = match Earlier::at(&path, task, s) {
-        Earlier::Finished(c) if summary_complete(dir) => {
+    let earlier = Earlier::at(&path, task, s);
+    if let Earlier::Finished(c) = &earlier {
+        if summary_complete(dir) {
             eprintln!(
                 "{}: kept (finished, {} iterations)",
                 dir.display(),
@@ -81,23 +81,8 @@ fn run_in(task: &Task, s: &Settings, dir: &Path, limits: &Limits) -> Result<()> 
             );
             return Ok(());
         }
-        Earlier::Finished(c) | Earlier::Unfinished(c) => {
-            eprintln!(
-                "{}: resuming from iteration {}",
-                dir.display(),
-                c.history.len()
-            );
-            Some(*c)
-        }
-        Earlier::None(None) => None,
-        Earlier::None(Some(why)) => {
-            eprintln!("{}: starting over ({why})", dir.display());
-            None
-        }
-    };
-    let settings = resume
-        .as_ref()
-        .map_or_else(|| s.clone(), |c| c.settings.clone());
+    }
+    let (resume, settings) = earlier.resume(&dir.display().to_string(), s);
     let control = Control {
         out: Some(dir),
         checkpoint: Some(path),
@@ -107,12 +92,7 @@ fn run_in(task: &Task, s: &Settings, dir: &Path, limits: &Limits) -> Result<()> 
         stop_after: limits.stop_after,
         progress: limits.shrink.is_none(),
     };
-    let outcome = run::optimize_with(task, &settings, control)?;
-    if outcome.summary.interrupted {
-        return Err(Box::new(Interrupted {
-            resume: String::new(),
-        }));
-    }
+    run::optimize_with(task, &settings, control)?.unless_interrupted()?;
     Ok(())
 }
 
@@ -194,6 +174,7 @@ fn all(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::run::interrupt::Interrupted;
 
     /// `history.csv` without its seconds, the summary's numbers without timings, the final
     /// image: what a resumed run must reproduce.

@@ -10,7 +10,6 @@ use std::path::Path;
 
 use super::Options;
 use crate::report::Result;
-use crate::run::interrupt::Interrupted;
 use crate::run::{self, Control, Earlier, Outcome, Settings};
 use crate::tasks::Task;
 
@@ -71,26 +70,10 @@ pub(super) fn optimize(opts: &Options, task: &Task, s: &Settings) -> Result<Outc
 
 /// Runs `task` with `s`, writing its checkpoint to `path` now and then, continuing the
 /// unfinished run `path` holds (Ctrl-C during an experiment), and removing `path` once the
-/// run is done (the cache entry then keeps it). An interrupted run returns [`Interrupted`].
+/// run is done (the cache entry then keeps it). An interrupted run returns
+/// [`Interrupted`](crate::run::interrupt::Interrupted).
 fn run_with_checkpoint(opts: &Options, task: &Task, s: &Settings, path: &Path) -> Result<Outcome> {
-    let resume = match Earlier::at(path, task, s) {
-        Earlier::Unfinished(c) | Earlier::Finished(c) => {
-            eprintln!(
-                "  {}: resuming from iteration {}",
-                task.name(),
-                c.history.len()
-            );
-            Some(*c)
-        }
-        Earlier::None(None) => None,
-        Earlier::None(Some(why)) => {
-            eprintln!("  {}: starting over ({why})", task.name());
-            None
-        }
-    };
-    let settings = resume
-        .as_ref()
-        .map_or_else(|| s.clone(), |c| c.settings.clone());
+    let (resume, settings) = Earlier::at(path, task, s).resume(&format!("  {}", task.name()), s);
     let control = Control {
         checkpoint: Some(path.to_path_buf()),
         resume,
@@ -98,12 +81,7 @@ fn run_with_checkpoint(opts: &Options, task: &Task, s: &Settings, path: &Path) -
         stop_after: opts.stop_after,
         ..Control::default()
     };
-    let outcome = run::optimize_with(task, &settings, control)?;
-    if outcome.summary.interrupted {
-        return Err(Box::new(Interrupted {
-            resume: String::new(),
-        }));
-    }
+    let outcome = run::optimize_with(task, &settings, control)?.unless_interrupted()?;
     let _ = fs::remove_file(path);
     Ok(outcome)
 }
@@ -122,6 +100,17 @@ use crate::run::checkpoint::{executable_hash, fnv1a};
 mod tests {
     use super::*;
     use crate::experiments::quick_options;
+    use crate::run::interrupt::Interrupted;
+
+    /// SHADOW at 1/64 of the pixels and 2 spp, for `iterations`: a run of a few seconds.
+    fn tiny_shadow(iterations: usize) -> (Task, Settings) {
+        let t = super::super::task("shadow").unwrap();
+        let mut s = Settings::defaults(&t);
+        s.iterations = iterations;
+        s.spp = 2;
+        s.scale = Some(0.125);
+        (t, s)
+    }
 
     /// A second identical run is read back (its measured seconds are the first run's, which a
     /// new run would not repeat); another setting is a new run.
@@ -129,11 +118,7 @@ mod tests {
     fn runs_are_cached_by_settings() {
         let opts = quick_options("cache");
         let out = opts.out.clone();
-        let t = super::super::task("shadow").unwrap();
-        let mut s = Settings::defaults(&t);
-        s.iterations = 3;
-        s.spp = 2;
-        s.scale = Some(0.125);
+        let (t, mut s) = tiny_shadow(3);
         let first = optimize(&opts, &t, &s).unwrap();
         let again = optimize(&opts, &t, &s).unwrap();
         assert_eq!(first.summary.seconds_total, again.summary.seconds_total);
@@ -153,11 +138,7 @@ mod tests {
     fn an_interrupted_run_of_an_experiment_is_continued() {
         let mut opts = quick_options("cache-resume");
         let out = opts.out.clone();
-        let t = super::super::task("shadow").unwrap();
-        let mut s = Settings::defaults(&t);
-        s.iterations = 8;
-        s.spp = 2;
-        s.scale = Some(0.125);
+        let (t, s) = tiny_shadow(8);
         let alone = run::optimize(&t, &s, None, false).unwrap();
         opts.stop_after = Some(3);
         let err = optimize(&opts, &t, &s).err().expect("interrupted");

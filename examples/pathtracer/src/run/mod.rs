@@ -164,6 +164,26 @@ impl Earlier {
             Err(e) => Earlier::None(Some(e)),
         }
     }
+
+    /// The run to continue (`None`: start over) and the settings to run with: the
+    /// checkpoint's, else `requested`. Says which on stderr, naming the run `label`.
+    pub fn resume(self, label: &str, requested: &Settings) -> (Option<Checkpoint>, Settings) {
+        let resume = match self {
+            Earlier::Finished(c) | Earlier::Unfinished(c) => {
+                eprintln!("{label}: resuming from iteration {}", c.history.len());
+                Some(*c)
+            }
+            Earlier::None(None) => None,
+            Earlier::None(Some(why)) => {
+                eprintln!("{label}: starting over ({why})");
+                None
+            }
+        };
+        let settings = resume
+            .as_ref()
+            .map_or_else(|| requested.clone(), |c| c.settings.clone());
+        (resume, settings)
+    }
 }
 
 /// What both loops are handed: the task, the settings, the reference, the start, the
@@ -399,8 +419,13 @@ where
 }
 
 /// Adam (projected onto the task's box, if it has one) under the paper's annealing schedule
-/// or, for the ablation, a constant sigma.
-fn optimizer(task: &Task, s: &Settings) -> Result<Optimizer> {
+/// or, for the ablation, a constant sigma: the optimiser of [`optimize`], also for loops that
+/// evaluate elsewhere (the MPI example).
+///
+/// # Errors
+/// Settings that Adam or the annealer reject (a learning rate or sigma0 not positive, zero
+/// iterations).
+pub fn optimizer(task: &Task, s: &Settings) -> Result<Optimizer> {
     let mut adam = Adam::new(s.lr)?;
     if let Some((lower, upper)) = task.bounds() {
         adam = adam.bounds(lower, upper)?;
@@ -606,24 +631,36 @@ mod tests {
     use super::*;
     use crate::tasks;
 
-    /// paper's start (the shadow far from the target's, a plateau for small moves).
-    #[test]
-    fn shadow_converges_from_its_plateau_and_finite_differences_stay_stuck() {
+    /// SHADOW at a sixteenth of the pixels and 4 spp, the image error never rendered: the
+    /// task and the settings of the quick runs below.
+    fn quick_shadow() -> (Task, Settings) {
         let task = tasks::by_name("shadow").expect("the SHADOW task exists");
         let mut s = Settings::defaults(&task);
         s.scale = Some(0.25);
         s.spp = 4;
         s.eval_every = usize::MAX;
-        let ours = optimize(&task, &s, None, false).expect("the run succeeds");
-        let m = &ours.summary;
-        // The paper reaches 1.81e-3 at full resolution; a sixteenth of the pixels is noisier,
-        // so ask for an order of magnitude less than the start's 1.625 and well under 1e-2.
+        (task, s)
+    }
+
+    /// A quick SHADOW run that left the plateau. The paper reaches 1.81e-3 at full
+    /// resolution; a sixteenth of the pixels is noisier, so ask for an order of magnitude
+    /// less than the start's 1.625 and well under 1e-2.
+    fn assert_converged(method: &str, m: &Summary) {
         assert!(
             m.param_mse < 1e-2,
-            "plateau-free gradient: param MSE {} (from {})",
+            "{method}: param MSE {} (from {})",
             m.param_mse,
             m.initial_param_mse
         );
+    }
+
+    /// SHADOW from the paper's start (the shadow far from the target's, a plateau for small
+    /// moves): the plateau-free gradient leaves the plateau, finite differences stay stuck.
+    #[test]
+    fn shadow_converges_from_its_plateau_and_finite_differences_stay_stuck() {
+        let (task, mut s) = quick_shadow();
+        let ours = optimize(&task, &s, None, false).expect("the run succeeds");
+        assert_converged("plateau-free gradient", &ours.summary);
 
         s.method = Method::Fd;
         let fd = optimize(&task, &s, None, false).expect("the run succeeds");
@@ -640,21 +677,12 @@ mod tests {
     /// paper loop's evaluations (here 2 x 150 = 300), with one history row per iteration.
     #[test]
     fn the_adaptive_search_converges_on_shadow_within_the_loops_evaluations() {
-        let task = tasks::by_name("shadow").expect("the SHADOW task exists");
-        let mut s = Settings::defaults(&task);
-        s.scale = Some(0.25);
-        s.spp = 4;
+        let (task, mut s) = quick_shadow();
         s.iterations = 150;
-        s.eval_every = usize::MAX;
         s.method = Method::Adaptive;
         let run = optimize(&task, &s, None, false).expect("the run succeeds");
         let m = &run.summary;
-        assert!(
-            m.param_mse < 1e-2,
-            "adaptive search: param MSE {} (from {})",
-            m.param_mse,
-            m.initial_param_mse
-        );
+        assert_converged("adaptive search", m);
         assert!(
             m.evaluations <= s.samples * s.iterations,
             "{} evaluations",

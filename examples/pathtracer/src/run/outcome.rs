@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use plateau::Sampling;
 
+use super::interrupt::Interrupted;
 use super::{Crn, Method};
 use crate::report::{self, Result};
 
@@ -97,6 +98,19 @@ pub struct Outcome {
     pub summary: Summary,
     /// `history.csv`: one row per iteration.
     pub history: Vec<Row>,
+}
+
+impl Outcome {
+    /// The outcome of a run that ended, or [`Interrupted`] for one that was interrupted
+    /// (after writing its checkpoint; the caller's caller knows the command to continue).
+    pub fn unless_interrupted(self) -> Result<Outcome> {
+        if self.summary.interrupted {
+            return Err(Box::new(Interrupted {
+                resume: String::new(),
+            }));
+        }
+        Ok(self)
+    }
 }
 
 /// `history.csv`: one row per iteration.

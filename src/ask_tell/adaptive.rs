@@ -1,0 +1,200 @@
+//! The adaptive search of [`super::AskTell`] between asks.
+
+use nalgebra::DVector;
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+use super::{count, non_finite, AskTell, Best};
+use crate::adaptive::{rng, Params, SearchGaussian};
+use crate::error::Error;
+use crate::minimize::{Metric, Minimum, Options, Stop, FULL_METRIC_MAX_DIM};
+use crate::objective::Points;
+
+/// Mixed into the seed for the polish's random stream, so that it is not the loop's.
+const POLISH_STREAM: u64 = 0x706f_6c69_7368_0001;
+
+/// The adaptive search between asks: `Minimizer`'s loop over runs and generations, unrolled.
+pub(super) struct Adaptive {
+    rng: Xoshiro256PlusPlus,
+    sigma0: f64,
+    scales: Vec<f64>,
+    full: bool,
+    lambda: usize,
+    start: Vec<f64>,
+    iterations: usize,
+    restarts: usize,
+    /// The run in progress; `None` when the next ask starts one.
+    dist: Option<SearchGaussian>,
+    /// The asked generation's offsets (repaired onto the bounds), while its values are
+    /// awaited.
+    asked: Option<Vec<DVector<f64>>>,
+    pub(super) points: Vec<f64>,
+    pub(super) seeds: Vec<u64>,
+}
+
+impl Adaptive {
+    pub(super) fn new(o: &Options, x0: &[f64]) -> Adaptive {
+        let n = x0.len();
+        // The start spread and the covariance's starting scales: from the box, else from x0.
+        let (sigma0, scales) = match (&o.bounds, o.sigma0) {
+            (Some((lo, hi)), s) => {
+                let widths: Vec<f64> = lo.iter().zip(hi).map(|(l, u)| u - l).collect();
+                let mean = widths.iter().sum::<f64>() / n as f64;
+                if mean > 0.0 {
+                    let scales = widths.iter().map(|w| (w / mean).max(1e-12)).collect();
+                    (s.unwrap_or(0.25 * mean), scales)
+                } else {
+                    (s.unwrap_or(1.0), vec![1.0; n])
+                }
+            }
+            (None, Some(s)) => (s, vec![1.0; n]),
+            (None, None) => {
+                let big = x0.iter().fold(1.0f64, |a, v| a.max(v.abs()));
+                (0.5 * big, vec![1.0; n])
+            }
+        };
+        let full = match o.metric {
+            Metric::Full => true,
+            Metric::Diagonal => false,
+            Metric::Auto => n <= FULL_METRIC_MAX_DIM,
+        };
+        Adaptive {
+            rng: rng(o.seed),
+            sigma0,
+            scales,
+            full,
+            lambda: o.population.unwrap_or_else(|| Params::default_lambda(n)),
+            start: x0.to_vec(),
+            iterations: 0,
+            restarts: 0,
+            dist: None,
+            asked: None,
+            points: Vec::new(),
+            seeds: Vec::new(),
+        }
+    }
+
+    /// The polish after the paper's loop: a search from the loop's best point `x` whose
+    /// spread starts at the loop's last one, with its own random stream, counting iterations
+    /// on from the loop's.
+    pub(super) fn polishing(o: &Options, x: &[f64], loop_end: &Minimum) -> Adaptive {
+        let mut start = o.clone();
+        start.sigma0 = Some(loop_end.sigma);
+        start.seed = o.seed ^ POLISH_STREAM;
+        let mut adaptive = Adaptive::new(&start, x);
+        adaptive.iterations = loop_end.iterations;
+        adaptive
+    }
+
+    /// Draws the next generation into `points` and `seeds`.
+    pub(super) fn ask(
+        &mut self,
+        o: &Options,
+        budget: usize,
+        evaluations: usize,
+        n: usize,
+    ) -> Result<(), Error> {
+        if self.asked.is_some() {
+            return Err(Error::AskPending);
+        }
+        let dist = self.dist.get_or_insert_with(|| {
+            let mut dist = SearchGaussian::new(
+                &self.start,
+                self.sigma0,
+                &self.scales,
+                self.lambda,
+                self.full,
+            );
+            dist.mirrored = o.mirrored;
+            dist.flat_growth = o.flat_growth;
+            dist
+        });
+        let mut ys = dist.sample(&mut self.rng).ys;
+        let count = ys.len().min(budget - evaluations);
+        ys.truncate(count);
+        self.points.clear();
+        for y in ys.iter_mut() {
+            let mut x = dist.point(y);
+            if let Some((lo, hi)) = &o.bounds {
+                let mut moved = false;
+                for i in 0..n {
+                    let c = x[i].clamp(lo[i], hi[i]);
+                    moved |= c != x[i];
+                    x[i] = c;
+                }
+                if moved {
+                    // The offset of the point actually evaluated, for the update.
+                    *y = (&x - &dist.mean) / dist.sigma;
+                }
+            }
+            self.points.extend(x.iter());
+        }
+        if let Some(index) = self.points.iter().position(|v| !v.is_finite()) {
+            return Err(Error::NonFinitePoint {
+                sample: evaluations + index / n,
+                index: index % n,
+                value: self.points[index],
+            });
+        }
+        let seed = o.seed ^ (self.iterations as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        self.seeds.clear();
+        self.seeds.resize(count, seed);
+        self.asked = Some(ys);
+        Ok(())
+    }
+
+    /// Takes the asked generation's values: the best point, the budget, the target, the
+    /// distribution's update and, when a run ends, the restart. Returns the result once the
+    /// whole run has ended.
+    pub(super) fn tell(
+        &mut self,
+        o: &Options,
+        budget: usize,
+        evaluations: &mut usize,
+        best: &mut Best,
+        values: &[f64],
+        n: usize,
+    ) -> Result<Option<Minimum>, Error> {
+        let (Some(ys), Some(dist)) = (&self.asked, &mut self.dist) else {
+            return Err(Error::NothingAsked);
+        };
+        let points = Points::new(&self.points, n);
+        count(ys.len(), values.len())?;
+        non_finite(values, points, *evaluations)?;
+        best.see(points, values);
+        let count = values.len();
+        *evaluations += count;
+        self.iterations += 1;
+        let end = |stop, sigma| {
+            Some(AskTell::minimum(
+                best,
+                *evaluations,
+                self.iterations,
+                self.restarts,
+                sigma,
+                stop,
+            ))
+        };
+        if o.target.is_some_and(|t| best.fun <= t) {
+            return Ok(end(Stop::Target, dist.sigma));
+        }
+        if *evaluations >= budget || count < dist.p.lambda {
+            return Ok(end(Stop::Budget, dist.sigma));
+        }
+        let ended = dist.update(ys, values).is_some();
+        let sigma = dist.sigma;
+        self.asked = None;
+        if ended {
+            if !o.restarts {
+                let result = end(Stop::Converged, sigma);
+                return Ok(result);
+            }
+            self.restarts += 1;
+            self.lambda *= 2;
+            if o.restart_from_best {
+                self.start.clone_from(&best.x);
+            }
+            self.dist = None;
+        }
+        Ok(None)
+    }
+}
