@@ -10,8 +10,9 @@
 use std::cell::RefCell;
 
 use plateau::{
-    Adam, Annealer, Ask, AskTell, Batch, Error, Minimizer, Minimum, OnFailure, Optimizer,
-    OptimizerState, PaperAskTell, PlateauFreeGradient, Points, Sampling, Seeded, Stop, Strategy,
+    Adam, Annealer, Ask, AskTell, Batch, Error, Minimizer, Minimum, Objective, OnFailure,
+    Optimizer, OptimizerState, PaperAskTell, PlateauFreeGradient, Points, Sampling, Seeded, Stop,
+    Strategy,
 };
 
 fn rosen(x: &[f64]) -> f64 {
@@ -280,43 +281,49 @@ fn ask_and_tell_gives_the_pinned_results_of_the_callback_form() {
     }
 }
 
+/// The line `PINNED` holds for `tag`.
+fn pinned(tag: &str) -> &'static str {
+    PINNED
+        .iter()
+        .find(|l| l.starts_with(&format!("{tag}:")))
+        .unwrap_or_else(|| panic!("no pinned line for {tag}"))
+}
+
+/// Runs `minimizer` (the callback form) from `x0` and compares its result with the line
+/// pinned for `tag`.
+fn assert_run_is_pinned<F: Objective>(tag: &str, minimizer: Minimizer<F>, x0: &[f64]) {
+    assert_eq!(show(tag, &minimizer.run(x0).unwrap()), pinned(tag));
+}
+
 #[test]
 fn the_callback_form_still_gives_the_pinned_results() {
     for seed in 0..3u64 {
-        let want = |tag: &str| {
-            PINNED
-                .iter()
-                .find(|l| l.starts_with(&format!("{tag}:")))
-                .unwrap()
-                .to_string()
-        };
-        let tag = format!("rosen s{seed}");
-        let got = Minimizer::new(rosen)
-            .budget(3000)
-            .seed(seed)
-            .run(&[0.0; 4])
-            .unwrap();
-        assert_eq!(show(&tag, &got), want(&tag));
-        let tag = format!("batch bounds s{seed}");
-        let got = Minimizer::new(Batch(noisy_batch))
-            .budget(1200)
-            .seed(seed)
-            .bounds(vec![-1.0; 3], vec![4.0; 3])
-            .target(0.05)
-            .run(&[0.0; 3])
-            .unwrap();
-        assert_eq!(show(&tag, &got), want(&tag));
-        let tag = format!("paper seeded bounds s{seed}");
-        let got = Minimizer::new(Seeded(noisy))
-            .budget(402)
-            .seed(seed)
-            .strategy(PAPER)
-            .bounds(vec![-1.0; 3], vec![2.5; 3])
-            .run(&[0.0; 3])
-            .unwrap();
-        assert_eq!(show(&tag, &got), want(&tag));
+        let tag = |name: &str| format!("{name} s{seed}");
+        assert_run_is_pinned(
+            &tag("rosen"),
+            Minimizer::new(rosen).budget(3000).seed(seed),
+            &[0.0; 4],
+        );
+        assert_run_is_pinned(
+            &tag("batch bounds"),
+            Minimizer::new(Batch(noisy_batch))
+                .budget(1200)
+                .seed(seed)
+                .bounds(vec![-1.0; 3], vec![4.0; 3])
+                .target(0.05),
+            &[0.0; 3],
+        );
+        assert_run_is_pinned(
+            &tag("paper seeded bounds"),
+            Minimizer::new(Seeded(noisy))
+                .budget(402)
+                .seed(seed)
+                .strategy(PAPER)
+                .bounds(vec![-1.0; 3], vec![2.5; 3]),
+            &[0.0; 3],
+        );
         for (name, sampling, antithetic, orthogonal) in LOOPS {
-            let tag = format!("{name} s{seed}");
+            let tag = tag(name);
             let mut grad = loop_estimator(
                 PlateauFreeGradient::new(Seeded(noisy)),
                 seed,
@@ -325,7 +332,7 @@ fn the_callback_form_still_gives_the_pinned_results() {
                 orthogonal,
             );
             let h = loop_optimizer().minimize(&mut grad, &LOOP_START).unwrap();
-            assert_eq!(show_history(&tag, &h), want(&format!("optimizer {tag}")));
+            assert_eq!(show_history(&tag, &h), pinned(&format!("optimizer {tag}")));
         }
     }
 }

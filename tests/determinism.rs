@@ -8,7 +8,7 @@ use std::sync::Mutex;
 use plateau::{Adam, Annealer, Batch, Optimizer, PlateauFreeGradient, Points, Sampling, Seeded};
 
 mod common;
-use common::{bits, tilted_2d};
+use common::{assert_repeats_sequential_and_parallel, bits, tilted_2d};
 
 /// Every (sampler, antithetic, orthogonal) combination the estimator accepts: all but the
 /// per-coordinate sampler with orthogonal directions.
@@ -120,17 +120,14 @@ fn parallel_equals_sequential_on_one_two_and_four_threads() {
 
 #[test]
 fn optimisation_runs_repeat_exactly() {
-    let go = |parallel: bool| {
-        let mut grad = PlateauFreeGradient::new(tilted_2d)
-            .samples(8)
-            .seed(7)
-            .parallel(parallel);
-        let mut opt = Optimizer::new(Adam::new(0.02).unwrap(), Annealer::paper(0.5, 50).unwrap());
-        opt.minimize(&mut grad, &[1.0, 1.0]).unwrap()
-    };
-    let a = go(false);
-    assert_eq!(a, go(false));
-    assert_eq!(a, go(true));
+    assert_repeats_sequential_and_parallel(
+        || PlateauFreeGradient::new(tilted_2d).samples(8).seed(7),
+        |grad| {
+            let mut opt =
+                Optimizer::new(Adam::new(0.02).unwrap(), Annealer::paper(0.5, 50).unwrap());
+            opt.minimize(grad, &[1.0, 1.0]).unwrap()
+        },
+    );
 }
 
 /// Records `(point, seed)` of every call, in call order.

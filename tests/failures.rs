@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use plateau::{Adam, Annealer, Error, OnFailure, Optimizer, OptimizerState, PlateauFreeGradient};
 
 mod common;
-use common::{bits, tilted_2d};
+use common::{assert_repeats_sequential_and_parallel, bits, tilted_2d};
 
 /// NaN on the bands where `x0 + x1` has a fractional part below 0.3: about a third of the
 /// plane, so most estimates at sigma 0.5 meet it.
@@ -61,22 +61,22 @@ fn resample_redraws_until_finite_and_counts_it() {
 
 #[test]
 fn resampling_is_deterministic_and_parallel_matches_sequential() {
-    let run = |parallel: bool| {
-        let mut grad = PlateauFreeGradient::new(banded)
-            .samples(8)
-            .seed(9)
-            .parallel(parallel)
-            .on_failure(OnFailure::Resample { limit: 100 });
-        (0..10)
-            .map(|i| {
-                let e = grad.estimate(&[0.5 + 0.1 * i as f64, 0.6], 0.5).unwrap();
-                (bits(&e.gradient), e.resampled, e.mean_value.to_bits())
-            })
-            .collect::<Vec<_>>()
-    };
-    let a = run(false);
-    assert_eq!(a, run(false));
-    assert_eq!(a, run(true));
+    assert_repeats_sequential_and_parallel(
+        || {
+            PlateauFreeGradient::new(banded)
+                .samples(8)
+                .seed(9)
+                .on_failure(OnFailure::Resample { limit: 100 })
+        },
+        |grad| {
+            (0..10)
+                .map(|i| {
+                    let e = grad.estimate(&[0.5 + 0.1 * i as f64, 0.6], 0.5).unwrap();
+                    (bits(&e.gradient), e.resampled, e.mean_value.to_bits())
+                })
+                .collect::<Vec<_>>()
+        },
+    );
 }
 
 #[test]

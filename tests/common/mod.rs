@@ -4,7 +4,9 @@
 //! would warn in the others.
 #![allow(dead_code)]
 
-use plateau::GradientEstimator;
+use std::fmt::Debug;
+
+use plateau::{GradientEstimator, Objective, PlateauFreeGradient};
 
 /// The 2-D tilted step `1[x + 2y > 0.3]`: from (1, 1) the edge is 2.7 away along `x + 2y`,
 /// a plateau for any local method.
@@ -47,4 +49,20 @@ pub fn gradient_draws<G: GradientEstimator>(
         }
     }
     draws
+}
+
+/// Runs `run` on the estimator `make` builds, with sequential evaluation twice and then with
+/// parallel evaluation, and asserts that all three give the same result: a run repeats
+/// exactly, and parallel evaluation does not change it.
+pub fn assert_repeats_sequential_and_parallel<F, T>(
+    make: impl Fn() -> PlateauFreeGradient<F>,
+    run: impl Fn(&mut PlateauFreeGradient<F>) -> T,
+) where
+    F: Objective + Sync,
+    T: PartialEq + Debug,
+{
+    let go = |parallel: bool| run(&mut make().parallel(parallel));
+    let first = go(false);
+    assert_eq!(first, go(false), "a second sequential run");
+    assert_eq!(first, go(true), "parallel evaluation");
 }
