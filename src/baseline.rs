@@ -26,11 +26,8 @@ use crate::seeding::{stream_rng, stream_seed};
 /// # Ok::<(), plateau::Error>(())
 /// ```
 pub struct FiniteDifference<F> {
-    objective: F,
+    common: Common<F>,
     step: f64,
-    seed: u64,
-    estimates: u64,
-    point: Vec<f64>,
 }
 
 impl<F: Objective> FiniteDifference<F> {
@@ -41,42 +38,32 @@ impl<F: Objective> FiniteDifference<F> {
     pub fn new(objective: F, step: f64) -> Result<Self, Error> {
         check::positive("step", step)?;
         Ok(FiniteDifference {
-            objective,
+            common: Common::new(objective),
             step,
-            seed: 0,
-            estimates: 0,
-            point: Vec::new(),
         })
     }
 
     setters! {
         /// The seed handed to a seeded objective (the same for both sides of a difference).
-        seed(seed: u64) => seed = seed;
-    }
-}
-
-impl<F: Objective> GradientEstimator for FiniteDifference<F> {
-    fn stream_position(&self) -> Option<u64> {
-        Some(self.estimates)
+        seed(seed: u64) => common.seed = seed;
     }
 
-    fn set_stream_position(&mut self, position: u64) {
-        self.estimates = position;
+    /// The input check: theta only (the spread is ignored).
+    fn check(theta: &[f64], _sigma: f64) -> Result<(), Error> {
+        check::theta(theta)
     }
 
-    fn estimate(&mut self, theta: &[f64], _sigma: f64) -> Result<Estimate, Error> {
-        check::theta(theta)?;
+    /// The gradient of estimate `index`, its input checked.
+    fn gradient(&mut self, theta: &[f64], _sigma: f64, index: u64) -> Result<Estimate, Error> {
         let n = theta.len();
         let h = self.step;
-        let index = self.estimates;
-        self.estimates += 1;
-        self.point.clear();
-        self.point.extend_from_slice(theta);
+        self.common.points.clear();
+        self.common.points.extend_from_slice(theta);
         let mut gradient = vec![0.0; n];
         let mut mean_value = 0.0;
         let mut pair_means = Vec::with_capacity(n);
         for i in 0..n {
-            let seed = stream_seed(self.seed, index, i as u64);
+            let seed = stream_seed(self.common.seed, index, i as u64);
             let side = |x: f64, sample: usize, point: &mut Vec<f64>| {
                 // theta near f64::MAX plus the step overflows: never evaluate f there.
                 if !x.is_finite() {
@@ -87,11 +74,11 @@ impl<F: Objective> GradientEstimator for FiniteDifference<F> {
                     });
                 }
                 point[i] = x;
-                evaluate_finite(&self.objective, point, seed, sample)
+                evaluate_finite(&self.common.objective, point, seed, sample)
             };
-            let plus = side(theta[i] + h, 2 * i, &mut self.point)?;
-            let minus = side(theta[i] - h, 2 * i + 1, &mut self.point)?;
-            self.point[i] = theta[i];
+            let plus = side(theta[i] + h, 2 * i, &mut self.common.points)?;
+            let minus = side(theta[i] - h, 2 * i + 1, &mut self.common.points)?;
+            self.common.points[i] = theta[i];
             gradient[i] = (0.5 * plus - 0.5 * minus) / h;
             mean_value += (plus + minus) / (2 * n) as f64;
             pair_means.push(0.5 * plus + 0.5 * minus);
@@ -125,10 +112,7 @@ impl<F: Objective> GradientEstimator for FiniteDifference<F> {
 /// # Ok::<(), plateau::Error>(())
 /// ```
 pub struct Spsa<F> {
-    objective: F,
-    seed: u64,
-    estimates: u64,
-    points: Vec<f64>,
+    common: Common<F>,
 }
 
 impl<F: Objective> Spsa<F> {
@@ -136,48 +120,45 @@ impl<F: Objective> Spsa<F> {
     #[must_use]
     pub fn new(objective: F) -> Self {
         Spsa {
-            objective,
-            seed: 0,
-            estimates: 0,
-            points: Vec::new(),
+            common: Common::new(objective),
         }
     }
 
     setters! {
         /// The seed of the directions and of the objective's seeds.
-        seed(seed: u64) => seed = seed;
-    }
-}
-
-impl<F: Objective> GradientEstimator for Spsa<F> {
-    fn stream_position(&self) -> Option<u64> {
-        Some(self.estimates)
+        seed(seed: u64) => common.seed = seed;
     }
 
-    fn set_stream_position(&mut self, position: u64) {
-        self.estimates = position;
-    }
-
-    fn estimate(&mut self, theta: &[f64], sigma: f64) -> Result<Estimate, Error> {
+    /// The input check: the spread, then theta.
+    fn check(theta: &[f64], sigma: f64) -> Result<(), Error> {
         check::sigma(sigma)?;
-        check::theta(theta)?;
+        check::theta(theta)
+    }
+
+    /// The gradient of estimate `index`, its input checked.
+    fn gradient(&mut self, theta: &[f64], sigma: f64, index: u64) -> Result<Estimate, Error> {
         let n = theta.len();
-        let index = self.estimates;
-        self.estimates += 1;
-        let mut rng = stream_rng(self.seed, index, 0);
+        let mut rng = stream_rng(self.common.seed, index, 0);
         let delta: Vec<f64> = (0..n)
             .map(|_| if rng.random::<bool>() { 1.0 } else { -1.0 })
             .collect();
-        self.points.clear();
-        self.points
+        self.common.points.clear();
+        self.common
+            .points
             .extend(theta.iter().zip(&delta).map(|(t, d)| t + sigma * d));
-        self.points
+        self.common
+            .points
             .extend(theta.iter().zip(&delta).map(|(t, d)| t - sigma * d));
-        check::points(&self.points, n)?;
-        let seed = stream_seed(self.seed, index, 1);
+        check::points(&self.common.points, n)?;
+        let seed = stream_seed(self.common.seed, index, 1);
         let mut values = [0.0; 2];
         for (k, v) in values.iter_mut().enumerate() {
-            *v = evaluate_finite(&self.objective, &self.points[k * n..(k + 1) * n], seed, k)?;
+            *v = evaluate_finite(
+                &self.common.objective,
+                &self.common.points[k * n..(k + 1) * n],
+                seed,
+                k,
+            )?;
         }
         let half_diff = 0.5 * values[0] - 0.5 * values[1];
         let gradient: Vec<f64> = delta.iter().map(|d| half_diff / (sigma * d)).collect();
@@ -190,6 +171,55 @@ impl<F: Objective> GradientEstimator for Spsa<F> {
         })
     }
 }
+
+/// What both baselines hold: the objective; the seed and the count of estimates, which name
+/// each estimate's random streams (the count is the stream position that an
+/// [`crate::OptimizerState`] records); scratch space for the points evaluated.
+struct Common<F> {
+    objective: F,
+    seed: u64,
+    estimates: u64,
+    points: Vec<f64>,
+}
+
+impl<F> Common<F> {
+    /// Seed 0, no estimate drawn yet.
+    fn new(objective: F) -> Self {
+        Common {
+            objective,
+            seed: 0,
+            estimates: 0,
+            points: Vec::new(),
+        }
+    }
+}
+
+/// [`GradientEstimator`] for the baselines, written once: the stream position is the count
+/// of estimates, and an estimate is the type's `check` of its input (a bad input spends no
+/// index), the next index, then the type's `gradient` (an estimate that fails there has
+/// spent its index, as the plateau-free estimator's does).
+macro_rules! baseline_estimator {
+    ($($baseline:ident),*) => {$(
+        impl<F: Objective> GradientEstimator for $baseline<F> {
+            fn stream_position(&self) -> Option<u64> {
+                Some(self.common.estimates)
+            }
+
+            fn set_stream_position(&mut self, position: u64) {
+                self.common.estimates = position;
+            }
+
+            fn estimate(&mut self, theta: &[f64], sigma: f64) -> Result<Estimate, Error> {
+                Self::check(theta, sigma)?;
+                let index = self.common.estimates;
+                self.common.estimates += 1;
+                self.gradient(theta, sigma, index)
+            }
+        }
+    )*};
+}
+
+baseline_estimator!(FiniteDifference, Spsa);
 
 /// `f(point)`, or the error that names evaluation `sample` and its point.
 fn evaluate_finite<F: Objective>(
@@ -216,8 +246,8 @@ impl<F> fmt::Debug for FiniteDifference<F> {
         f.debug_struct("FiniteDifference")
             .field("objective", &std::any::type_name::<F>())
             .field("step", &self.step)
-            .field("seed", &self.seed)
-            .field("estimates", &self.estimates)
+            .field("seed", &self.common.seed)
+            .field("estimates", &self.common.estimates)
             .finish_non_exhaustive()
     }
 }
@@ -227,8 +257,8 @@ impl<F> fmt::Debug for Spsa<F> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("Spsa")
             .field("objective", &std::any::type_name::<F>())
-            .field("seed", &self.seed)
-            .field("estimates", &self.estimates)
+            .field("seed", &self.common.seed)
+            .field("estimates", &self.common.estimates)
             .finish_non_exhaustive()
     }
 }
