@@ -385,9 +385,16 @@ fn impossible_combinations_exit_2_before_any_work() {
             "--budget",
         ),
         (
+            vec![
+                "optimize", "shadow", "--method", "polished", "--budget", "5", "--out", &o,
+            ],
+            "--budget",
+        ),
+        (
             vec!["optimize", "shadow", "--out", &o, "--resume", &o],
             "--resume",
         ),
+        (vec!["seeds", "--runs", &o], "--runs"),
     ] {
         let t = std::time::Instant::now();
         let (code, stderr) = run(&args);
@@ -397,4 +404,32 @@ fn impossible_combinations_exit_2_before_any_work() {
         assert!(t.elapsed().as_secs_f64() < 1.0);
         assert!(!out.exists());
     }
+}
+
+#[test]
+fn the_seeds_page_puts_studies_side_by_side() {
+    // The paper loop's committed seeds study (docs/results/seeds-paper): SHADOW and CUP on
+    // seeds 0-9, 8 and 2 of them at or below the paper's parameter MSE.
+    let runs = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../docs/results/seeds-paper"
+    );
+    let page = fresh("seeds").join("seeds.md");
+    let page_arg = page.display().to_string();
+    let (code, stderr) = run(&["seeds", "--runs", runs, "--page", &page_arg]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let md = std::fs::read_to_string(&page).expect("the page is written");
+    assert!(
+        md.contains("## SHADOW (paper's parameter MSE 1.81e-3)"),
+        "{md}"
+    );
+    assert!(md.contains("## CUP"), "{md}");
+    assert!(md.contains("| at or below the paper | 8 of 10 |"), "{md}");
+    assert!(md.contains("| at or below the paper | 2 of 10 |"), "{md}");
+    // Seed 1 of SHADOW left the frame (5.63), seed 0 did not (2.21e-7, bold).
+    assert!(
+        md.contains("| 1 | 5.63e0 |") && md.contains("| 0 | **2.21e-7** |"),
+        "{md}"
+    );
+    assert!(!md.contains("## GI"), "tasks without runs have no section");
 }

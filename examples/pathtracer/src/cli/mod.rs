@@ -8,6 +8,7 @@ mod experiment;
 mod landscape;
 mod optimize;
 mod render;
+mod seeds;
 mod summarize;
 mod timings;
 mod values;
@@ -42,6 +43,9 @@ enum Command {
     /// Rewrites `results.md` in a directory of runs (as `all` leaves it) from their
     /// `summary.json` files.
     Summarize(summarize::Args),
+    /// Several seeds studies (directories of runs of `all --seeds K`) side by side: each
+    /// seed's parameter MSE per method, how many reach the paper's, median, range, seconds.
+    Seeds(seeds::Args),
     /// Median render time of every task at its defaults (target parameters, seed 0, scene
     /// set-up excluded), as a markdown table.
     Timings(timings::Args),
@@ -200,6 +204,7 @@ fn run_cli(cli: Cli) -> Result<()> {
         Command::Render(args) => render::run(args),
         Command::All(args) => all::run(args),
         Command::Summarize(args) => summarize::run(args),
+        Command::Seeds(args) => seeds::run(args),
         Command::Timings(args) => timings::run(args),
         Command::Landscape(args) => landscape::run(args),
         Command::Experiment(args) => experiment::run(args),

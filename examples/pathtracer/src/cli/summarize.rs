@@ -72,6 +72,17 @@ pub(super) fn write_results(out: &Path, command: &str) -> Result<()> {
     Ok(())
 }
 
+/// The method of a run, as the tables name it.
+pub(super) fn method_label(s: &run::Summary) -> String {
+    match s.method {
+        run::Method::Plateau => format!("paper loop, {:?}", s.sampling).to_lowercase(),
+        run::Method::Adaptive => "adaptive search".into(),
+        run::Method::Polished => "paper loop, polished".into(),
+        run::Method::Fd => "finite difference".into(),
+        run::Method::Spsa => "SPSA".into(),
+    }
+}
+
 /// One row of `results.md`: the settings, our errors over seeds, the paper's and the baseline's.
 fn results_row(task: &Task, ours: &[run::Summary], fd: Option<&run::Summary>) -> Vec<String> {
     let s = &ours[0];
@@ -94,13 +105,7 @@ fn results_row(task: &Task, ours: &[run::Summary], fd: Option<&run::Summary>) ->
     };
     vec![
         task.name().to_uppercase(),
-        match s.method {
-            run::Method::Plateau => format!("paper loop, {:?}", s.sampling).to_lowercase(),
-            run::Method::Adaptive => "adaptive search".into(),
-            run::Method::Polished => "paper loop, polished".into(),
-            run::Method::Fd => "finite difference".into(),
-            run::Method::Spsa => "SPSA".into(),
-        },
+        method_label(s),
         s.samples.to_string(),
         s.sigma0.to_string(),
         s.spp.to_string(),

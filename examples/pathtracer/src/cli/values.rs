@@ -80,6 +80,16 @@ pub(super) fn out_dir(s: &str) -> Result<PathBuf, String> {
     }
 }
 
+/// An existing directory of runs (to read).
+pub(super) fn runs_dir(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    if !s.is_empty() && path.is_dir() {
+        Ok(path)
+    } else {
+        Err("allowed: an existing directory of runs (as `all --out DIR` leaves it)".into())
+    }
+}
+
 /// The directory of a run to resume: an existing directory with a `checkpoint.json` (whether
 /// the checkpoint is good is checked next, before any work).
 pub(super) fn run_dir(s: &str) -> Result<PathBuf, String> {
