@@ -14,7 +14,8 @@ The main entry points:
 - :class:`PlateauFreeGradient` -- ``PlateauFreeGradient(fun).estimate(x, sigma)``.
 - :func:`minimize` -- ``minimize(fun, x0, budget=...)`` runs the library's general-purpose
   search (``plateau::Minimizer``); with ``sigma0``/``lr``/``iterations``, or
-  ``method='plateau'``, the paper's loop. Returns an :class:`OptimizeResult`.
+  ``method='plateau'``, the paper's loop; ``method='polished'``, the paper's loop and then the
+  adaptive search. Returns an :class:`OptimizeResult`.
 - :class:`Annealer` (``paper``, ``constant``, ``exponential``, ``cosine``), :class:`Adam`
   (with bounds), :class:`Sampling` (``Radial``, ``PerCoordinate``, ``Gaussian``).
 - :func:`ask_tell` -- the same runs with the points evaluated by the caller:
@@ -113,10 +114,10 @@ class OptimizeResult(dict[str, Any]):
     Attributes
     ----------
     x : numpy.ndarray
-        ``method='adaptive'``: the best point seen. The paper's loop: the parameters after the
+        ``method='adaptive'`` and ``'polished'``: the best point seen. The paper's loop: the parameters after the
         last iteration. Shaped like ``x0``.
     fun : float
-        ``fun(x)``: the best value seen (adaptive), or evaluated once after the run (the paper's
+        ``fun(x)``: the best value seen (adaptive, polished), or evaluated once after the run (the paper's
         loop, see ``final_evaluation``).
     nit : int
         Iterations completed.
@@ -125,17 +126,19 @@ class OptimizeResult(dict[str, Any]):
     success : bool
         Whether the run ended normally (always True; failures raise).
     status : int
-        The paper's loop: 0 all iterations done, 1 stopped by the callback. Adaptive: 0 budget
-        spent, 1 stopped by the callback, 2 target reached, 3 converged (``restarts=False``).
+        The paper's loop: 0 all iterations done, 1 stopped by the callback. Adaptive and
+        polished: 0 budget spent, 1 stopped by the callback, 2 target reached, 3 converged
+        (``restarts=False``).
     message : str
         What happened, in words (adaptive: the stop reason, ``'budget spent'``,
         ``'target reached'``, ``'converged'`` or ``'stopped by the callback'``).
     restarts : int or None
-        Adaptive only: restarts of the search distribution (None when stopped by the callback).
+        Adaptive and polished only: restarts of the search distribution (None when stopped by
+        the callback).
     sigma : float or None
-        Adaptive only: the spread at the end (None when stopped by the callback).
+        Adaptive and polished only: the spread at the end (None when stopped by the callback).
     history : History or None
-        The paper's loop: per-iteration records. Adaptive: None.
+        The paper's loop: per-iteration records. Adaptive, polished: None.
     """
 
     x: _FloatArray
@@ -245,16 +248,17 @@ def _parse_bounds(bounds: Any, shape: tuple[int, ...]) -> tuple[list[float], lis
 
 
 def _adaptive_bounds(
-    bounds: Any, shape: tuple[int, ...]
+    bounds: Any, shape: tuple[int, ...], method: str = "adaptive"
 ) -> Optional[tuple[list[float], list[float]]]:
-    """``method='adaptive'``'s box: :func:`_parse_bounds`, finite only."""
+    """The box of ``method='adaptive'`` (or ``'polished'``): :func:`_parse_bounds`, finite
+    only."""
     if bounds is None:
         return None
     box = _parse_bounds(bounds, shape)
     for i, (lo, hi) in enumerate(zip(*box)):
         if not (math.isfinite(lo) and math.isfinite(hi)):
             raise ValueError(
-                f"bounds[{i}] = ({lo}, {hi}): method='adaptive' needs finite bounds "
+                f"bounds[{i}] = ({lo}, {hi}): method={method!r} needs finite bounds "
                 "(the box sets the starting spread and where restarts go)"
             )
     return box
@@ -269,18 +273,55 @@ def _adaptive_options(
     population: Optional[int],
     restarts: bool,
     shape: tuple[int, ...],
+    paper: Optional[tuple[int, float, float]] = None,
+    polish: Optional[float] = None,
 ) -> _plateau._AdaptiveOptions:
-    """The options of ``method='adaptive'`` as the Rust side takes them, the same for
-    :func:`minimize` and :func:`ask_tell`."""
+    """The options of ``method='adaptive'`` (and, with ``paper`` and ``polish``, of
+    ``method='polished'``) as the Rust side takes them, the same for :func:`minimize` and
+    :func:`ask_tell`."""
     return {
         "budget": None if budget is None else int(budget),
         "seed": seed,
         "sigma0": sigma0,
-        "bounds": _adaptive_bounds(bounds, shape),
+        "bounds": _adaptive_bounds(bounds, shape, "adaptive" if paper is None else "polished"),
         "target": target,
         "population": population,
         "restarts": restarts,
+        "paper": paper,
+        "polish": polish,
     }
+
+
+def _is_number(value: Any) -> bool:
+    """Whether ``value`` is a real number (an int or a float, numpy's included; not a bool)."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(
+        value, (bool, np.bool_)
+    )
+
+
+def _polished_options(
+    sigma0: Optional[float], lr: Optional[float], samples: Optional[int], polish: Optional[float]
+) -> tuple[tuple[int, float, float], float]:
+    """``method='polished'``'s ``(samples, lr, sigma0)`` of the paper's loop and the polish
+    fraction, the defaults (the paper loop's, and a quarter) filled in and checked."""
+    defaults = _PaperOptions()
+    samples = defaults.samples if samples is None else samples
+    lr = defaults.lr if lr is None else lr
+    sigma0 = defaults.sigma0 if sigma0 is None else sigma0
+    polish = 0.25 if polish is None else polish
+    if not _is_number(samples) or int(samples) != samples or samples < 2 or samples % 2:
+        raise ValueError(
+            f"samples = {samples!r} must be an even whole number, at least 2 (antithetic pairs)"
+        )
+    for name, value in (("lr", lr), ("sigma0", sigma0)):
+        if not _is_number(value) or not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} = {value!r} must be a finite number > 0")
+    if not _is_number(polish) or not 0.0 <= polish < 1.0:
+        raise ValueError(
+            f"polish = {polish!r} must be a fraction of the budget in [0, 1) "
+            "(the share the adaptive search gets after the paper's loop)"
+        )
+    return (int(samples), float(lr), float(sigma0)), float(polish)
 
 
 def _choose_method(
@@ -288,10 +329,13 @@ def _choose_method(
     budget: Optional[int],
     sigma0: Optional[float],
     paper_only: dict[str, Any],
+    polish: Optional[float] = None,
 ) -> str:
     """The method of a :func:`minimize` or :func:`ask_tell` call, lower case, after the checks
     that do not depend on it: ``budget`` a whole number, no option of the paper's loop (the
-    entries of ``paper_only`` that are not None) with ``method='adaptive'``."""
+    entries of ``paper_only`` that are not None) with ``method='adaptive'``, only ``lr`` and
+    ``samples`` of them and a ``budget`` with ``method='polished'``, ``polish`` with
+    ``method='polished'`` alone."""
     if budget is not None and (isinstance(budget, bool) or int(budget) != budget or budget < 1):
         raise ValueError(f"budget = {budget!r} must be a whole number of evaluations, at least 1")
     if method is None:
@@ -305,6 +349,26 @@ def _choose_method(
                 f"{', '.join(given)}: options of the paper's loop, not of method='adaptive' "
                 "(use budget, or method='plateau')"
             )
+    if method == "polished":
+        if budget is None:
+            raise ValueError(
+                "budget: method='polished' needs one (the paper's loop spends the first "
+                "1 - polish of it, the adaptive search the rest)"
+            )
+        given = [
+            name
+            for name, value in paper_only.items()
+            if value is not None and name not in ("lr", "samples")
+        ]
+        if given:
+            raise ValueError(
+                f"{', '.join(given)}: options of method='plateau', not of method='polished' "
+                "(its paper loop takes sigma0, lr and samples)"
+            )
+    elif polish is not None and method in ("adaptive", "plateau", "paper", "fd", "spsa"):
+        raise ValueError(
+            f"polish = {polish!r}: an option of method='polished', not of method={method!r}"
+        )
     return method
 
 
@@ -445,10 +509,11 @@ def minimize(
     batched: bool = False,
     seeded: bool = False,
     callback: Optional[Callable[..., Any]] = None,
-    method: Optional[Literal["adaptive", "plateau", "fd", "spsa"]] = None,
+    method: Optional[Literal["adaptive", "plateau", "polished", "fd", "spsa"]] = None,
     target: Optional[float] = None,
     population: Optional[int] = None,
     restarts: bool = True,
+    polish: Optional[float] = None,
     step: Optional[float] = None,
     orthogonal: Optional[bool] = None,
     parallel: Optional[bool] = None,
@@ -459,13 +524,16 @@ def minimize(
 ) -> OptimizeResult:
     """Minimise ``fun`` from ``x0``: ``minimize(fun, x0, budget=...)`` is the first thing to try.
 
-    Two methods. ``'adaptive'`` (the default when ``budget`` is given and none of ``sigma0``,
-    ``lr``, ``iterations`` is) is the library's general-purpose search, ``plateau::minimize`` /
-    ``plateau::Minimizer``: a Gaussian search distribution around a mean, ranked values, a
-    spread and metric that adapt to ``fun`` (and grow on plateaus), restarts from the best point
-    with a doubled population; no step size or learning rate to choose. It returns the best
-    point seen. ``'plateau'`` (the default otherwise) is the paper's loop: the plateau-free
-    gradient, Adam and an annealed sigma; it returns the last iterate.
+    Two methods and their combination. ``'adaptive'`` (the default when ``budget`` is given
+    and none of ``sigma0``, ``lr``, ``iterations`` is) is the library's general-purpose search,
+    ``plateau::minimize`` / ``plateau::Minimizer``: a Gaussian search distribution around a
+    mean, ranked values, a spread and metric that adapt to ``fun`` (and grow on plateaus),
+    restarts from the best point with a doubled population; no step size or learning rate to
+    choose. It returns the best point seen. ``'plateau'`` (the default otherwise) is the
+    paper's loop: the plateau-free gradient, Adam and an annealed sigma; it returns the last
+    iterate. ``'polished'`` (``Minimizer::strategy(Strategy::Paper {..}).polish(..)``) runs the
+    paper's loop on the first ``1 - polish`` of ``budget``, then the adaptive search from the
+    loop's best point with the loop's last sigma on the rest; it returns the best point seen.
 
     Parameters
     ----------
@@ -520,9 +588,13 @@ def minimize(
         with ``nit`` and ``nfev``.
     method : str, optional
         ``'adaptive'`` (the default with ``budget`` and none of ``sigma0``, ``lr``,
-        ``iterations``), ``'plateau'`` (the paper's loop; the default otherwise), or a baseline
-        on the paper's loop: ``'fd'`` (central finite differences of step ``step``) or
-        ``'spsa'``. The options of the paper's loop alone (``iterations``, ``lr``,
+        ``iterations``), ``'plateau'`` (the paper's loop; the default otherwise),
+        ``'polished'`` (the paper's loop, then the adaptive search; needs ``budget``, takes
+        ``sigma0``, ``lr``, ``samples`` -- the loop's, defaults 0.5, 0.02, 2 --, ``polish``,
+        ``seed``, ``bounds`` (finite), ``target``, ``population`` and ``restarts`` -- the
+        adaptive search's --, ``batched``, ``seeded``, ``callback``; another option of the
+        paper's loop is a ValueError), or a baseline on the paper's loop: ``'fd'`` (central
+        finite differences of step ``step``) or ``'spsa'``. The options of the paper's loop alone (``iterations``, ``lr``,
         ``samples``, ``sampling``, ``antithetic``, ``annealer``, ``sigma_min``, ``step``,
         ``orthogonal``, ``parallel``, ``record_x``, ``final_evaluation``) default to None, which
         means the paper loop's default; giving any of them, or ``sigma0``, selects the paper's
@@ -535,6 +607,10 @@ def minimize(
     restarts : bool
         Adaptive: restart from the best point with a doubled population when a run converges or
         stalls while budget remains (default). Off, the run ends with ``'converged'``.
+    polish : float, optional
+        ``method='polished'`` alone (a ValueError with another method): the fraction of
+        ``budget``, in ``[0, 1)``, that the adaptive search gets after the paper's loop
+        (default 0.25; 0: the loop alone, its best point returned).
     record_x : bool
         Keep ``x`` after every iteration in ``history.x``.
     final_evaluation : bool
@@ -557,14 +633,15 @@ def minimize(
     -------
     OptimizeResult
         ``x``, ``fun``, ``nit``, ``nfev``, ``success``, ``status``, ``message``, ``history``;
-        adaptive: also ``restarts`` and ``sigma``, and ``history`` is None.
+        adaptive and polished: also ``restarts`` and ``sigma``, and ``history`` is None.
 
     Raises
     ------
     ValueError
         Bad input (non-finite or empty ``x0``, budget < 1, sigma <= 0, samples 0, odd samples
-        with antithetic pairs, bounds with lower > upper, ``x0`` outside the bounds, ...), or ``fun`` returning NaN or an
-        infinity, or a batch of the wrong length.
+        with antithetic pairs, bounds with lower > upper, ``x0`` outside the bounds, ``polish``
+        outside ``[0, 1)``, an option the method does not take, ...), or ``fun`` returning NaN
+        or an infinity, or a batch of the wrong length.
     TypeError
         ``fun`` returning something that is not a number.
     Exception
@@ -587,22 +664,29 @@ def minimize(
         "record_x": record_x,
         "final_evaluation": final_evaluation,
     }
-    chosen = _choose_method(method, budget, sigma0, paper_only)
+    chosen = _choose_method(method, budget, sigma0, paper_only, polish)
     if checkpoint_every is not None and (
         isinstance(checkpoint_every, bool)
         or int(checkpoint_every) != checkpoint_every
         or checkpoint_every < 0
     ):
         raise ValueError(f"checkpoint_every = {checkpoint_every!r} must be a whole number >= 0")
-    if chosen == "adaptive":
+    if chosen in ("adaptive", "polished"):
         if checkpoint is not None:
             raise ValueError(
                 "checkpoint: supported by the paper's loop (method='plateau', 'fd' or 'spsa'); "
-                "method='adaptive' keeps its state inside the Rust Minimizer"
+                f"method={chosen!r} keeps its state inside the Rust Minimizer"
             )
-        options = _adaptive_options(
-            budget, seed, sigma0, bounds, target, population, restarts, x0_array.shape
-        )
+        if chosen == "polished":
+            paper, fraction = _polished_options(sigma0, lr, samples, polish)
+            options = _adaptive_options(
+                budget, seed, None, bounds, target, population, restarts, x0_array.shape,
+                paper=paper, polish=fraction,
+            )
+        else:
+            options = _adaptive_options(
+                budget, seed, sigma0, bounds, target, population, restarts, x0_array.shape
+            )
         return _minimize_adaptive(
             fun, x0_array, options, batched=batched, seeded=seeded, callback=callback
         )
@@ -628,7 +712,7 @@ def minimize(
         per_iteration = 2
     else:
         raise ValueError(
-            f"method = {chosen!r} is not a method: use 'adaptive', 'plateau', 'fd' or 'spsa'"
+            f"method = {chosen!r} is not a method: use 'adaptive', 'plateau', 'polished', 'fd' or 'spsa'"
         )
     iterations, annealer, adam = o.schedule(budget, per_iteration, bounds, x0_array.shape)
     settings = None
@@ -706,7 +790,7 @@ def _minimize_adaptive(
     seeded: bool,
     callback: Optional[Callable[..., Any]],
 ) -> OptimizeResult:
-    """``method='adaptive'``: the Rust ``plateau::Minimizer``."""
+    """``method='adaptive'`` and ``'polished'``: the Rust ``plateau::Minimizer``."""
     raw_callback = None
     if callback is not None:
         as_result = _wants_intermediate_result(callback)
@@ -760,7 +844,7 @@ class AskTell:
 
     @property
     def method(self) -> str:
-        """``'adaptive'`` or ``'plateau'`` (the paper's loop)."""
+        """``'adaptive'``, ``'plateau'`` (the paper's loop) or ``'polished'``."""
         return self._method
 
     @property
@@ -779,7 +863,8 @@ class AskTell:
 
         The adaptive search asks for one generation (one seed for all its points, a new one
         each generation); the paper's loop for one gradient estimate (one seed per
-        antithetic pair) and, last, for its final point alone (with ``seed``). An objective
+        antithetic pair) and, last, for its final point alone (with ``seed``);
+        ``'polished'`` for the paper loop's, then the adaptive search's. An objective
         with noise of its own should use the seeds (common random numbers): they are the
         seeds a ``seeded=True`` ``fun`` receives from :func:`minimize`.
 
@@ -808,8 +893,8 @@ class AskTell:
 
     @property
     def best(self) -> Optional[tuple[_FloatArray, float]]:
-        """``(x, fun)``, the best point told so far and its value (``method='adaptive'``);
-        None before the first value and for the paper's loop."""
+        """``(x, fun)``, the best point told so far and its value (``method='adaptive'`` or
+        ``'polished'``); None before the first value and for the paper's loop."""
         best: Optional[tuple[_FloatArray, float]] = self._raw.best()
         return best
 
@@ -827,7 +912,7 @@ class AskTell:
             raise ValueError(
                 f"the run has not ended ({self.nfev} evaluations told): ask and tell until done"
             )
-        if self._method == "adaptive":
+        if self._method in ("adaptive", "polished"):
             return _adaptive_result(raw)
         return _paper_result(raw, raw["final_value"])
 
@@ -840,13 +925,14 @@ def ask_tell(
     x0: npt.ArrayLike,
     *,
     budget: Optional[int] = None,
-    method: Optional[Literal["adaptive", "plateau", "paper"]] = None,
+    method: Optional[Literal["adaptive", "plateau", "paper", "polished"]] = None,
     seed: int = 0,
     sigma0: Optional[float] = None,
     bounds: Optional[_Bounds] = None,
     target: Optional[float] = None,
     population: Optional[int] = None,
     restarts: bool = True,
+    polish: Optional[float] = None,
     iterations: Optional[int] = None,
     lr: Optional[float] = None,
     samples: Optional[int] = None,
@@ -862,7 +948,8 @@ def ask_tell(
 
     The options, their defaults and the choice of method are :func:`minimize`'s
     (``method='adaptive'``, the default with ``budget`` and none of the paper loop's options,
-    or ``'plateau'`` -- also spelt ``'paper'`` -- the paper's loop). With the same options and
+    ``'plateau'`` -- also spelt ``'paper'`` -- the paper's loop, or ``'polished'``, the
+    paper's loop then the adaptive search, with ``polish``). With the same options and
     seed, ``ask_tell(x0, ...).result`` after the loop below is ``minimize(fun, x0, ...)``, bit
     for bit::
 
@@ -893,16 +980,23 @@ def ask_tell(
         "record_x": record_x,
         "final_evaluation": final_evaluation,
     }
-    chosen = _choose_method(method, budget, sigma0, paper_only)
+    chosen = _choose_method(method, budget, sigma0, paper_only, polish)
     if chosen == "adaptive":
         options = _adaptive_options(
             budget, seed, sigma0, bounds, target, population, restarts, x0_array.shape
         )
         raw = _plateau._AskTell.adaptive(x0_array, options)
         return AskTell(raw, "adaptive")
+    if chosen == "polished":
+        paper, fraction = _polished_options(sigma0, lr, samples, polish)
+        options = _adaptive_options(
+            budget, seed, None, bounds, target, population, restarts, x0_array.shape,
+            paper=paper, polish=fraction,
+        )
+        return AskTell(_plateau._AskTell.adaptive(x0_array, options), "polished")
     if chosen not in ("plateau", "paper"):
         raise ValueError(
-            f"method = {chosen!r} is not a method of ask_tell: use 'adaptive' or 'plateau' "
+            f"method = {chosen!r} is not a method of ask_tell: use 'adaptive', 'plateau' or 'polished' "
             "(the baselines 'fd' and 'spsa' are minimize's alone)"
         )
     o = _PaperOptions.given(sigma0, paper_only)

@@ -21,7 +21,7 @@ use plateau::baseline::{FiniteDifference as RsFiniteDifference, Spsa as RsSpsa};
 use plateau::{
     Adam as RsAdam, Annealer as RsAnnealer, Error, GradientEstimator, Minimizer as RsMinimizer,
     Minimum as RsMinimum, Objective, Optimizer, PlateauFreeGradient as RsPlateauFreeGradient,
-    Points, Sampling, Schedule, Stop,
+    Points, Sampling, Schedule, Stop, Strategy,
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
