@@ -1,5 +1,6 @@
 """Type stubs of the Rust extension module ``plateau._plateau``; its public names are
-re-exported by ``plateau`` (whose own code, ``__init__.py``, is typed inline)."""
+re-exported by ``plateau`` (whose own modules, ``__init__.py``, ``_minimize.py``, ..., are
+typed inline)."""
 
 from typing import Any, Callable, Literal, Optional, Sequence, Tuple, TypedDict, Union, final
 
@@ -179,7 +180,7 @@ __all__ = [
 
 class _AdaptiveOptions(TypedDict):
     """The options of ``method='adaptive'`` and ``'polished'``: the dict that
-    ``plateau._adaptive_options`` makes, every key given. A name of the stubs alone (the
+    ``plateau._options._adaptive_options`` makes, every key given. A name of the stubs alone (the
     extension takes a plain dict). ``paper``: ``Strategy::Paper``'s ``(samples, lr, sigma0)``
     and ``polish`` its fraction (``method='polished'``), else None."""
 
