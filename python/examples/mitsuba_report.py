@@ -187,9 +187,48 @@ def write_page(args, out: Path, seeds: list[int]) -> Path:
     return page
 
 
+def search_text(method: str, budget, sigma0, any_run: dict) -> dict:
+    """The words of the adaptive (or polished) runs' page that depend on the method."""
+    if method == "adaptive":
+        return {
+            "title": "plateau's adaptive search next to the paper's loop",
+            "rows": "one row per generation",
+            "call": (f"The adaptive search is `plateau.minimize(fun, x0, method=\"adaptive\", budget={budget}, "
+                     f"sigma0={sigma0}, seed=seed, batched=True)` (no bounds: SHADOW's parameters are unbounded), "
+                     "configured as `pathtracer optimize shadow --method adaptive` (examples/pathtracer/src/run/adaptive.rs); "
+                     "it returns the best point it rendered."),
+            "iterations": "generations",
+            "explain": ("The adaptive rows: `generations` is the number of batches the search rendered (its "
+                        "population grows on each restart), `s/batch` the optimisation time per generation, "),
+            "plot": "adaptive search",
+            "curve": "Adaptive: the best point so far",
+        }
+    polish = any_run.get("polish", 0.25)
+    samples, lr = any_run.get("samples", 2), any_run.get("lr", 0.02)
+    return {
+        "title": "the paper's loop polished by the adaptive search (method 'polished') next to the paper's loop",
+        "rows": "one row per batch: the loop's gradient estimates, its final render, then the generations",
+        "call": (f"The polished run is `plateau.minimize(fun, x0, method=\"polished\", sigma0={sigma0}, lr={lr}, "
+                 f"samples={samples}, budget={budget}, polish={polish:g}, seed=seed, batched=True)` (the paper's "
+                 "SHADOW settings, Table 1; no bounds), configured as `pathtracer optimize shadow --method polished` "
+                 "(examples/pathtracer/src/run/adaptive.rs): the paper's loop (radial sampler with antithetic pairs, "
+                 f"the paper's annealer, Adam) on the first {1 - polish:g} of the renders"
+                 + (f" ({any_run['loop_renders']}, its final render included)" if "loop_renders" in any_run else "")
+                 + ", then the adaptive search from the loop's best point with the loop's last sigma on the rest; "
+                 "it returns the best point it rendered."),
+        "iterations": "iterations",
+        "explain": ("The polished rows: `iterations` counts the loop's iterations and then the adaptive "
+                    "search's generations, `s/batch` the optimisation time per iteration, "),
+        "plot": "polished (paper loop, then adaptive search)",
+        "curve": "Polished: the best point so far",
+    }
+
+
 def write_page_adaptive(args, out: Path, seeds: list[int]) -> Path:
-    """The adaptive runs' page (default OUT.md): per seed the adaptive search's figures next to
-    the paper loop's Mitsuba run of the same seed (--plateau-runs), seeds without a run named."""
+    """The adaptive (or, --method polished, the polished) runs' page (default OUT.md): per seed
+    the run's figures next to the paper loop's Mitsuba run of the same seed (--plateau-runs),
+    seeds without a run named."""
+    name = args.method  # "adaptive" or "polished": the runs' name in the page
     page = Path(args.page) if args.page else out.with_suffix(".md")
     rel = lambda p: os.path.relpath(p, page.parent)  # noqa: E731
     plateau_dir = Path(args.plateau_runs) if args.plateau_runs else REPO / "docs" / "results" / "mitsuba"
@@ -202,35 +241,32 @@ def write_page_adaptive(args, out: Path, seeds: list[int]) -> Path:
         if f.exists():
             paper[s] = json.loads(f.read_text())
     outrel = os.path.relpath(out.resolve(), REPO)
-    cmd = (f"python python/examples/mitsuba_shadow.py --method adaptive --seeds {len(seeds)}"
+    cmd = (f"python python/examples/mitsuba_shadow.py --method {name} --seeds {len(seeds)}"
            + (f" --run-seeds {args.run_seeds}" if args.run_seeds else "")
            + (f" --stop-at {args.stop_at}" if args.stop_at else "")
            + f" --out {outrel}")
     any_run = next(iter(runs.values()), {})
     budget = any_run.get("budget", args.samples * args.iterations)
-    L = ["# SHADOW on Mitsuba 3: plateau's adaptive search next to the paper's loop", "",
+    text = search_text(name, budget, any_run.get("sigma0", args.sigma0), any_run)
+    L = [f"# SHADOW on Mitsuba 3: {text['title']}", "",
          f"Written by `nice -n 5 {cmd}` (after `scripts/install-mitsuba` and `pip install ./python`; "
          "`--page-only` rewrites this page from the runs; `--stop-at` starts no new seed after that time, "
          "`--run-seeds` gives the order). "
-         f"Runs: `{outrel}/seed-<k>/` (history.csv, one row per generation; summary.json; target, start "
+         f"Runs: `{outrel}/seed-<k>/` (history.csv, {text['rows']}; summary.json; target, start "
          "and final images; convergence.png). The paper loop's runs: "
          f"`{os.path.relpath(plateau_dir.resolve(), REPO)}/seed-<k>/`, from [mitsuba.md](mitsuba.md).", "",
          f"Both get the same: the scene, start (-0.5, 2.5) and target (-1.5, 1.0) of SHADOW at 256x192, "
          f"{any_run.get('spp', args.spp)} spp, depth 6, Mitsuba as a black box (image MSE against the target, "
          "every render, the target's included, with the run's seed), the run's seed, and the paper's "
-         f"budget: N x iterations = 2 x 400 = {budget} renders. The adaptive search is "
-         f"`plateau.minimize(fun, x0, method=\"adaptive\", budget={budget}, sigma0={any_run.get('sigma0', args.sigma0)}, "
-         "seed=seed, batched=True)` (no bounds: SHADOW's parameters are unbounded), configured as "
-         "`pathtracer optimize shadow --method adaptive` (examples/pathtracer/src/run/adaptive.rs); it "
-         "returns the best point it rendered. The paper's loop: N = 2, sigma0 = 0.5, LR 0.02, 400 "
+         f"budget: N x iterations = 2 x 400 = {budget} renders. " + text["call"] + " The paper's loop: N = 2, sigma0 = 0.5, LR 0.02, 400 "
          "iterations, radial sampler with antithetic pairs, the paper's annealer, Adam; it returns "
          "the last iterate.", ""]
     if runs:
         L += [f"Mitsuba {any_run.get('mitsuba_version', '?')} (`{any_run.get('variant', args.variant)}`), "
               f"optimiser: {any_run.get('optimiser', '?')}, common random numbers: `{any_run.get('crn')}`.", ""]
     L += ["## Parameter MSE per seed", "",
-          "| seed | adaptive: param MSE | adaptive: image MSE | generations | restarts | renders "
-          "| adaptive: s/batch | adaptive: s/render | adaptive: final theta | paper loop: param MSE "
+          f"| seed | {name}: param MSE | {name}: image MSE | {text['iterations']} | restarts | renders "
+          f"| {name}: s/batch | {name}: s/render | {name}: final theta | paper loop: param MSE "
           "| paper loop: s/iter (2 renders) | paper loop: final theta |",
           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     theta = lambda r: "(" + ", ".join(f"{v:.2f}" for v in r["final_theta"]) + ")" if r.get("final_theta") else "-"  # noqa: E731
@@ -250,7 +286,7 @@ def write_page_adaptive(args, out: Path, seeds: list[int]) -> Path:
                  f"{fmt(q.get('param_mse'))} | {fmt(q.get('seconds_per_iteration'))} | {theta(q)} |")
     not_run = [s for s in seeds if s not in runs]
     paper_on_run = sum(1 for s in runs if s in paper and paper[s]["param_mse"] <= PAPER_PARAM_MSE)
-    L += ["", f"At or below the paper's parameter MSE (1.81e-3): **adaptive {n_ad} of {len(runs)}** seeds run"
+    L += ["", f"At or below the paper's parameter MSE (1.81e-3): **{name} {n_ad} of {len(runs)}** seeds run"
           + (f" (not run: {not_run})" if not_run else "")
           + f"; the paper's loop {paper_on_run} of the same {len(runs)}, {n_paper} of {len(paper)} in all. "
           "Goal of issue 13: at least 4 of 5 on Mitsuba.", ""]
@@ -259,13 +295,11 @@ def write_page_adaptive(args, out: Path, seeds: list[int]) -> Path:
         loads = [r.get("load_average_at_start") for r in runs.values() if r.get("load_average_at_start") is not None]
         L += [f"Seconds per render (optimisation time over renders; 2 CPU cores shared with other work, "
               f"load average " + (f"{min(loads):.1f} to {max(loads):.1f}" if len(loads) > 1 else f"{loads[0]:.1f}")
-              + " at the runs' starts): adaptive median "
+              + f" at the runs' starts): {name} median "
               f"{spr[len(spr) // 2]:.2f}"
               + (f", paper loop median {sorted(q['seconds_per_iteration'] / q['samples'] for q in paper.values())[len(paper) // 2]:.2f}"
                  if paper else "") + ".", ""]
-        L += ["The adaptive rows: `generations` is the number of batches the search rendered (its "
-              "population grows on each restart), `s/batch` the optimisation time per generation, "
-              "`s/render` per render; `image MSE` is the returned point rendered with the run's seed; "
+        L += [text["explain"] + "`s/render` per render; `image MSE` is the returned point rendered with the run's seed; "
               "`final theta` the returned point (target (-1.50, 1.00), start (-0.50, 2.50)). The start's image MSE: "
               + ", ".join(f"{fmt(r.get('initial_image_mse'))} (seed {s})" for s, r in sorted(runs.items())) + ".", ""]
     series = []
@@ -274,18 +308,18 @@ def write_page_adaptive(args, out: Path, seeds: list[int]) -> Path:
         c = colours[s % len(colours)]
         h = out / f"seed-{s}" / "history.csv"
         if h.exists():
-            series.append((f"adaptive, seed {s}", read_csv(h), {"color": c, "lw": 1.5}))
+            series.append((f"{name}, seed {s}", read_csv(h), {"color": c, "lw": 1.5}))
         h = plateau_dir / f"seed-{s}" / "history.csv"
         if h.exists() and s in runs:
             series.append((f"paper loop, seed {s}", read_csv(h), {"color": c, "lw": 0.8, "ls": "--"}))
     conv = out / "convergence_seeds.png"
-    if series and plot_convergence(conv, series, "SHADOW on Mitsuba 3: adaptive search (solid) and the paper's "
+    if series and plot_convergence(conv, series, f"SHADOW on Mitsuba 3: {text['plot']} (solid) and the paper's "
                                    "loop (dashed) per seed", x="renders", samples=args.samples):
         L += ["## Convergence", "",
-              "Against renders. Adaptive: the best point so far; the paper's loop: its iterate (the mean of "
+              f"Against renders. {text['curve']}; the paper's loop: its iterate (the mean of "
               "its antithetic pair). Right: the mean image MSE of each batch's renders.", "",
               f"![convergence]({rel(conv)})", ""]
-    L += ["## Images", "", "| seed | target | start | adaptive | paper loop |", "|---|---|---|---|---|"]
+    L += ["## Images", "", f"| seed | target | start | {name} | paper loop |", "|---|---|---|---|---|"]
     for s in seeds:
         d = out / f"seed-{s}"
         if s not in runs:

@@ -1,5 +1,5 @@
-"""One seed of the Mitsuba SHADOW example (mitsuba_shadow.py): plateau's paper loop or its
-adaptive search on Mitsuba renders, the run's files (images, history.csv, summary.json,
+"""One seed of the Mitsuba SHADOW example (mitsuba_shadow.py): plateau's paper loop, its
+adaptive search, or the loop polished by the adaptive search, on Mitsuba renders, the run's files (images, history.csv, summary.json,
 convergence.png) and its settings."""
 
 from __future__ import annotations
@@ -164,7 +164,8 @@ def run_plateau(mi, args, seed: int, out: Path) -> dict:
 
 
 # --------------------------------------------------------------------------------------
-# plateau's adaptive search on Mitsuba (--method adaptive).
+# plateau's adaptive search on Mitsuba (--method adaptive), or the paper's loop polished by it
+# (--method polished).
 
 def spread(points) -> float:
     """RMS distance per coordinate of a batch's points around their mean (the pathtracer's
@@ -179,18 +180,23 @@ def run_adaptive(mi, args, seed: int, out: Path) -> dict:
     """``plateau.minimize(method="adaptive")`` with the paper's budget (N x iterations renders),
     the task's sigma0 and the run's seed, no bounds (SHADOW's parameters are unbounded): as
     ``pathtracer optimize shadow --method adaptive`` (examples/pathtracer/src/run/adaptive.rs).
+    With ``args.method == "polished"``: ``plateau.minimize(method="polished")`` with the same
+    budget, seed and the paper loop's sigma0, lr and samples (Table 1), ``polish=args.polish``,
+    as ``pathtracer optimize shadow --method polished``: the paper's loop on the first
+    ``1 - polish`` of the renders, then the adaptive search from its best point.
 
     The objective is the plateau runs': the image MSE against the target, every render with the
-    run's seed (--crn fixed), or with the seed plateau gives the generation (--crn pair: one
-    seed for all points of a generation, a new one per generation). plateau hands each
-    generation's points over at once (batched=True): one row of history.csv per generation.
+    run's seed (--crn fixed), or with the seed plateau gives the batch (--crn pair: one seed for
+    all points of a generation, a new one per generation; one per antithetic pair in the
+    paper's loop). plateau hands each batch's points over at once (batched=True): one row of
+    history.csv per batch (a generation, or a gradient estimate of the paper's loop).
     """
     import numpy as np
 
     try:
         import plateau
     except ImportError:
-        sys.exit("--method adaptive needs the Python package plateau: `pip install ./python` "
+        sys.exit(f"--method {args.method} needs the Python package plateau: `pip install ./python` "
                  "(the numpy stand-in has only the paper's loop)")
     optimiser = "plateau " + str(getattr(plateau, "__version__", "")).strip()
     scene, reference, initial = start_images(mi, args, seed, out)
@@ -220,16 +226,24 @@ def run_adaptive(mi, args, seed: int, out: Path) -> dict:
         def fun(X):
             return evaluate(X, [seed] * len(X))
 
+    if args.method == "polished":
+        options = {"method": "polished", "sigma0": args.sigma0, "lr": args.lr, "samples": args.samples,
+                   "polish": args.polish}
+    else:
+        options = {"method": "adaptive", "sigma0": args.sigma0}
     t0 = time.perf_counter()
-    result = plateau.minimize(fun, np.array(ms.START, dtype=np.float64), method="adaptive", budget=budget,
-                              sigma0=args.sigma0, seed=seed, batched=True, seeded=(args.crn == "pair"))
+    result = plateau.minimize(fun, np.array(ms.START, dtype=np.float64), budget=budget, seed=seed,
+                              batched=True, seeded=(args.crn == "pair"), **options)
     seconds_total = batches[-1][2] if batches else time.perf_counter() - t0
     final_theta = np.asarray(result.x, dtype=np.float64)
 
-    # history.csv: row k is generation k: its size, the renders so far, the spread of its
-    # points, its mean image MSE (loss); the best point so far (what the run returns), its
-    # loss, parameter MSE and (every eval_every x N renders, and last) its image MSE rendered
-    # with the run's seed.
+    # history.csv: row k is batch k (a generation; polished: first the paper loop's gradient
+    # estimates and its final render, phase "loop", then the generations, phase "polish"): its
+    # size, the renders so far, the spread of its points, its mean image MSE (loss); the best
+    # point so far (what the run returns), its loss, parameter MSE and (every eval_every x N
+    # renders, and last) its image MSE rendered with the run's seed.
+    polished = args.method == "polished"
+    phase, loop_renders = "loop", 0
     rows = []
     best_value, best_x, nfev = math.inf, np.array(ms.START, dtype=np.float64), 0
     stride = max(args.eval_every * args.samples, 1)
@@ -239,7 +253,12 @@ def run_adaptive(mi, args, seed: int, out: Path) -> dict:
         for x, v in zip(X, values):
             if math.isfinite(v) and v < best_value:
                 best_value, best_x = float(v), x.copy()
-        rows.append({
+        row = {"phase": phase} if polished else {}
+        if polished and phase == "loop":
+            loop_renders = nfev
+            if len(values) == 1:  # the loop's final render: the polish starts after it
+                phase = "polish"
+        rows.append(row | {
             "iteration": k,
             "population": len(values),
             "renders": nfev,
@@ -259,7 +278,7 @@ def run_adaptive(mi, args, seed: int, out: Path) -> dict:
     final, image_mse_other_seed = finish_images(mi, scene, final_theta, seed, rows, out)
     nit = int(result.nit)
     nfev = int(result.nfev)
-    return {
+    return ({"polish": args.polish, "loop_renders": loop_renders} if polished else {}) | {
         "optimiser": optimiser,
         "budget": budget,
         "nit": nit,
@@ -287,6 +306,10 @@ def run_adaptive(mi, args, seed: int, out: Path) -> dict:
 # One seed: its settings, the run, its summary and plot.
 
 def settings(args, seed: int) -> dict:
+    if args.method == "polished":
+        # The paper loop's settings (its sampler, annealer, learning rate), and the share of
+        # the renders that the adaptive search gets after it.
+        return settings_plateau(args, seed) | {"polish": args.polish}
     return {
         "task": "shadow",
         "backbone": "mitsuba",
@@ -325,11 +348,14 @@ def run_one(mi, args, seed: int, out: Path, ad: dict | None) -> dict:
     summary["mitsuba_version"] = mi.__version__
     summary["load_average_at_start"] = os.getloadavg()[0]
     summary["cpus"] = os.cpu_count()
-    if args.method == "adaptive":
-        print(f"seed {seed}: plateau's adaptive search on Mitsuba, {args.samples * args.iterations} renders -> {out}",
+    if args.method in ("adaptive", "polished"):
+        what = ("plateau's adaptive search" if args.method == "adaptive"
+                else f"plateau's paper loop polished by its adaptive search (polish {args.polish})")
+        print(f"seed {seed}: {what} on Mitsuba, {args.samples * args.iterations} renders -> {out}",
               file=sys.stderr, flush=True)
         summary.update(run_adaptive(mi, args, seed, out))
-        print(f"seed {seed}: parameter MSE {summary['param_mse']:.3e}, {summary['nit']} generations, "
+        unit = "generations" if args.method == "adaptive" else "iterations (the loop's, then generations)"
+        print(f"seed {seed}: parameter MSE {summary['param_mse']:.3e}, {summary['nit']} {unit}, "
               f"{summary['seconds_per_evaluation']:.2f} s/render", file=sys.stderr, flush=True)
         (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
         replot_adaptive(mi, args, out, summary)
@@ -350,9 +376,16 @@ def run_one(mi, args, seed: int, out: Path, ad: dict | None) -> dict:
 
 
 def replot_adaptive(mi, args, out: Path, summary: dict) -> None:
-    plot_convergence(out / "convergence.png", [("adaptive (Mitsuba)", read_csv(out / "history.csv"), {})],
-                     f"SHADOW on Mitsuba {mi.__version__}, seed {summary['seed']}: plateau's adaptive search "
-                     f"({summary['nfev']} renders, sigma0={args.sigma0}, {args.spp} spp); best point so far",
+    """The convergence plot of an adaptive or polished run (``summary["method"]``)."""
+    if summary.get("method") == "polished":
+        label = "polished (Mitsuba)"
+        what = (f"plateau's paper loop (N={summary['samples']}, LR {summary['lr']}), then its adaptive "
+                f"search on the last {summary['polish']:g} of the renders")
+    else:
+        label, what = "adaptive (Mitsuba)", "plateau's adaptive search"
+    plot_convergence(out / "convergence.png", [(label, read_csv(out / "history.csv"), {})],
+                     f"SHADOW on Mitsuba {mi.__version__}, seed {summary['seed']}: {what} "
+                     f"({summary['nfev']} renders, sigma0={summary['sigma0']}, {summary['spp']} spp); best point so far",
                      x="renders")
 
 

@@ -38,6 +38,18 @@ history.csv per generation, and with --seeds writes OUT.md comparing each seed w
 loop's run (--plateau-runs, default docs/results/mitsuba). --run-seeds 1,4,0 picks the seeds
 to run and their order, --stop-at HH:MM starts no new seed after that time.
 
+The paper's loop polished by the adaptive search (no Mitsuba AD):
+
+    python python/examples/mitsuba_shadow.py --method polished --out out/mitsuba-polished [--seed S]
+    python python/examples/mitsuba_shadow.py --method polished --seeds 5 --out docs/results/mitsuba-polished
+
+runs ``plateau.minimize(fun, x0, method="polished", sigma0=sigma0, lr=lr, samples=samples,
+budget=samples x iterations, polish=0.25, seed=seed)`` (the paper's SHADOW settings, Table 1:
+sigma0 0.5, LR 0.02, N = 2, 800 renders): the paper's loop on the first 3/4 of the renders,
+then the adaptive search from its best point on the rest (--polish sets the share), as
+``pathtracer optimize shadow --method polished``. Outputs and options as --method adaptive;
+history.csv has a phase column (loop, polish).
+
 Common random numbers, as our task: by default (--crn fixed) every render, the target's
 included, uses the run's seed, so the loss is a deterministic function of theta that reaches
 zero at the target (our renderer's default and the paper's code). --crn pair gives the
@@ -71,10 +83,12 @@ from mitsuba_runs import replot, run_one, settings, time_renders  # noqa: E402
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--method", choices=["plateau", "adaptive"], default="plateau",
+    p.add_argument("--method", choices=["plateau", "adaptive", "polished"], default="plateau",
                    help="plateau: the paper's loop (and Mitsuba's AD); adaptive: plateau.minimize(method='adaptive') "
-                        "with a budget of samples x iterations renders (no AD)")
-    p.add_argument("--out", default=None, help="output folder (default out/mitsuba-shadow, or out/mitsuba-shadow-adaptive)")
+                        "with a budget of samples x iterations renders (no AD); polished: "
+                        "plateau.minimize(method='polished'), the paper's loop then the adaptive search, the same budget")
+    p.add_argument("--out", default=None,
+                   help="output folder (default out/mitsuba-shadow, or out/mitsuba-shadow-adaptive, -polished)")
     p.add_argument("--seed", type=int, default=0, help="the run's seed (perturbations and renders)")
     p.add_argument("--seeds", type=int, default=0, help="run seeds 0..K-1 into OUT/seed-<k> and write OUT.md")
     p.add_argument("--page-only", action="store_true", help="with --seeds: only rewrite the results page")
@@ -89,7 +103,11 @@ def main(argv=None) -> int:
     p.add_argument("--stop-at", default=None,
                    help="with --seeds: start no new seed at or after this time of day (HH:MM, machine clock)")
     p.add_argument("--plateau-runs", default=None,
-                   help="with --method adaptive: the paper loop's per-seed runs to compare with (default docs/results/mitsuba)")
+                   help="with --method adaptive or polished: the paper loop's per-seed runs to compare with "
+                        "(default docs/results/mitsuba)")
+    p.add_argument("--polish", type=float, default=0.25,
+                   help="with --method polished: the share of the renders the adaptive search gets after the "
+                        "paper's loop, in [0, 1) (default 0.25, as pathtracer --method polished)")
     p.add_argument("--iterations", type=int, default=400)
     p.add_argument("--samples", type=int, default=2, help="N: renders per gradient")
     p.add_argument("--sigma0", type=float, default=0.5)
@@ -111,7 +129,11 @@ def main(argv=None) -> int:
                    help="use the numpy stand-in optimiser if the plateau package is not installed")
     args = p.parse_args(argv)
 
-    out = Path(args.out or ("out/mitsuba-shadow" + ("-adaptive" if args.method == "adaptive" else "")))
+    if args.method != "polished" and args.polish != 0.25:
+        p.error("--polish: an option of --method polished")
+    if not 0.0 <= args.polish < 1.0:
+        p.error(f"--polish {args.polish}: a share of the renders in [0, 1) expected")
+    out = Path(args.out or ("out/mitsuba-shadow" + ("" if args.method == "plateau" else f"-{args.method}")))
     seeds = list(range(args.seeds))
     order = seeds
     if args.run_seeds:
@@ -128,7 +150,7 @@ def main(argv=None) -> int:
         except ValueError:
             p.error(f"--stop-at: HH:MM expected, got {args.stop_at!r}")
     if args.seeds and args.page_only:
-        if args.method == "adaptive":
+        if args.method in ("adaptive", "polished"):
             write_page_adaptive(args, out, seeds)
         else:
             merge_ad(None, args, out, seeds)
@@ -166,7 +188,7 @@ def main(argv=None) -> int:
             else:
                 yield s, d
 
-    if args.method == "adaptive":
+    if args.method in ("adaptive", "polished"):
         for s, d in seeds_to_run():
             run_one(mi, args, s, d, None)
             write_page_adaptive(args, out, seeds)
