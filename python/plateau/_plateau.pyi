@@ -1,5 +1,6 @@
 """Type stubs of the Rust extension module ``plateau._plateau``; its public names are
-re-exported by ``plateau`` (whose own code, ``__init__.py``, is typed inline)."""
+re-exported by ``plateau`` (whose own modules, ``__init__.py``, ``_minimize.py``, ..., are
+typed inline)."""
 
 from typing import Any, Callable, Literal, Optional, Sequence, Tuple, TypedDict, Union, final
 
@@ -178,8 +179,10 @@ __all__ = [
 ]
 
 class _AdaptiveOptions(TypedDict):
-    """The options of ``method='adaptive'``: the dict that ``plateau._adaptive_options`` makes,
-    every key given. A name of the stubs alone (the extension takes a plain dict)."""
+    """The options of ``method='adaptive'`` and ``'polished'``: the dict that
+    ``plateau._options._adaptive_options`` makes, every key given. A name of the stubs alone (the
+    extension takes a plain dict). ``paper``: ``Strategy::Paper``'s ``(samples, lr, sigma0)``
+    and ``polish`` its fraction (``method='polished'``), else None."""
 
     budget: int | None
     seed: int
@@ -188,6 +191,8 @@ class _AdaptiveOptions(TypedDict):
     target: float | None
     population: int | None
     restarts: bool
+    paper: tuple[int, float, float] | None
+    polish: float | None
 
 class _AskTell:
     """The Rust side of ``plateau.AskTell``: an adaptive or paper-loop run, asked and told."""
@@ -263,5 +268,7 @@ def _rust_reference_minimize_adaptive(
     sigma0: float | None = None,
     bounds: tuple[list[float], list[float]] | None = None,
     seeded: bool = False,
+    paper: tuple[int, float, float] | None = None,
+    polish: float | None = None,
 ) -> dict[str, Any]: ...
 def _rust_seconds_per_evaluation(dim: int = 10, samples: int = 10000, repeats: int = 5) -> float: ...

@@ -76,9 +76,10 @@ pub(crate) fn stop_name(stop: Stop) -> String {
 pub(crate) type Bounds = (Vec<f64>, Vec<f64>);
 
 /// `plateau::Minimizer` on a Python objective, the GIL released: what `plateau.minimize` runs
-/// for `method='adaptive'`, with the options of [`AdaptiveOptions`]. `callback(nit, best_x, best_fun, nfev)` runs after every iteration;
-/// a truthy return stops the run (then `restarts` and `sigma` are None). Returns a dict of raw
-/// results.
+/// for `method='adaptive'` and `'polished'` (`Strategy::Paper` and `polish`), with the
+/// options of [`AdaptiveOptions`]. `callback(nit, best_x, best_fun, nfev)` runs after every
+/// iteration (a generation, or a gradient estimate of the paper's loop); a truthy return stops
+/// the run (then `restarts` and `sigma` are None). Returns a dict of raw results.
 #[pyfunction]
 #[pyo3(signature = (fun, x0, options, batched=false, seeded=false, callback=None))]
 pub(crate) fn _minimize_adaptive<'py>(

@@ -1,5 +1,5 @@
 //! Ask and tell from Python: `_AskTell`, which `plateau.ask_tell(x0, ...)`
-//! (`python/plateau/__init__.py`) wraps. Nothing here calls Python: the caller evaluates the
+//! (`python/plateau/_ask_tell.py`) wraps. Nothing here calls Python: the caller evaluates the
 //! asked points wherever it likes and tells their values back.
 
 use super::*;

@@ -42,9 +42,9 @@ pub(crate) fn maybe<B, V>(builder: B, value: Option<V>, set: impl FnOnce(B, V) -
     }
 }
 
-/// The options of the adaptive search, the same for `plateau.minimize(method='adaptive')`
-/// and `plateau.ask_tell`: the dict that `plateau._adaptive_options` makes (a missing key is
-/// a TypeError naming it).
+/// The options of a `plateau::Minimizer` run, the same for `plateau.minimize` and
+/// `plateau.ask_tell` with `method='adaptive'` or `'polished'`: the dict that
+/// `plateau._options._adaptive_options` makes (a missing key is a TypeError naming it).
 #[derive(FromPyObject)]
 #[pyo3(from_item_all)]
 pub(crate) struct AdaptiveOptions {
@@ -55,6 +55,11 @@ pub(crate) struct AdaptiveOptions {
     target: Option<f64>,
     population: Option<usize>,
     restarts: bool,
+    /// `method='polished'`: `Strategy::Paper`'s `(samples, lr, sigma0)`; None for the
+    /// adaptive search alone.
+    paper: Option<(usize, f64, f64)>,
+    /// `method='polished'`: `Minimizer::polish`'s fraction of the budget.
+    polish: Option<f64>,
 }
 
 impl AdaptiveOptions {
@@ -67,7 +72,15 @@ impl AdaptiveOptions {
             m.bounds(lower, upper)
         });
         let minimizer = maybe(minimizer, self.target, RsMinimizer::target);
-        maybe(minimizer, self.population, RsMinimizer::population)
+        let minimizer = maybe(minimizer, self.population, RsMinimizer::population);
+        let minimizer = maybe(minimizer, self.paper, |m, (samples, lr, sigma0)| {
+            m.strategy(Strategy::Paper {
+                samples,
+                lr,
+                sigma0,
+            })
+        });
+        maybe(minimizer, self.polish, RsMinimizer::polish)
     }
 }
 

@@ -1,6 +1,6 @@
 //! Python bindings of `plateau`: the extension module `plateau._plateau`, re-exported (with
 //! `minimize`, `Sampling` and the result types) by the Python package `plateau`
-//! (`python/plateau/__init__.py`).
+//! (`python/plateau/__init__.py`, the code in `python/plateau/_minimize.py` and beside it).
 //!
 //! How a Python objective runs: every estimate, and every run of `plateau::Minimizer`
 //! (`plateau.minimize(fun, x0, budget=...)`), is computed with the GIL released
@@ -21,7 +21,7 @@ use plateau::baseline::{FiniteDifference as RsFiniteDifference, Spsa as RsSpsa};
 use plateau::{
     Adam as RsAdam, Annealer as RsAnnealer, Error, GradientEstimator, Minimizer as RsMinimizer,
     Minimum as RsMinimum, Objective, Optimizer, PlateauFreeGradient as RsPlateauFreeGradient,
-    Points, Sampling, Schedule, Stop,
+    Points, Sampling, Schedule, Stop, Strategy,
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;

@@ -107,8 +107,11 @@ pub(crate) fn staircase_seeded(x: &[f64], seed: u64) -> f64 {
 
 /// A Rust `Minimizer` run on `staircase` (or `staircase(x) + (seed % 1000) * 1e-3` when
 /// `seeded`): the result `plateau.minimize(..., budget=...)` must reproduce bit for bit.
+/// With `paper = (samples, lr, sigma0)` and `polish`: `Strategy::Paper` and
+/// `Minimizer::polish`, what `method='polished'` must reproduce.
 #[pyfunction]
-#[pyo3(signature = (x0, budget=None, seed=0, sigma0=None, bounds=None, seeded=false))]
+#[pyo3(signature = (x0, budget=None, seed=0, sigma0=None, bounds=None, seeded=false, paper=None, polish=None))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn _rust_reference_minimize_adaptive<'py>(
     py: Python<'py>,
     x0: Vec<f64>,
@@ -117,6 +120,8 @@ pub(crate) fn _rust_reference_minimize_adaptive<'py>(
     sigma0: Option<f64>,
     bounds: Option<Bounds>,
     seeded: bool,
+    paper: Option<(usize, f64, f64)>,
+    polish: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     macro_rules! run {
         ($objective:expr) => {{
@@ -124,6 +129,14 @@ pub(crate) fn _rust_reference_minimize_adaptive<'py>(
             let m = maybe(m, budget, RsMinimizer::budget);
             let m = maybe(m, sigma0, RsMinimizer::sigma0);
             let m = maybe(m, bounds, |m, (lower, upper)| m.bounds(lower, upper));
+            let m = maybe(m, paper, |m, (samples, lr, sigma0)| {
+                m.strategy(Strategy::Paper {
+                    samples,
+                    lr,
+                    sigma0,
+                })
+            });
+            let m = maybe(m, polish, RsMinimizer::polish);
             m.run(&x0).map_err(value_error)?
         }};
     }

@@ -149,6 +149,50 @@ def test_short_adaptive_run_writes_everything_and_returns_its_best_render(tmp_pa
     assert float(rows[-1]["image_mse"]) == pytest.approx(s["image_mse"], rel=1e-6)
 
 
+@needs_mitsuba
+@pytest.mark.skipif(not HAVE_PLATEAU and not REQUIRE,
+                    reason="--method polished needs the plateau package (pip install ./python)")
+def test_short_polished_run_is_the_loop_then_the_adaptive_search(tmp_path):
+    out = tmp_path / "polished"
+    # Budget N x iterations = 2 x 15 = 30 renders at 32x24: the loop gets 30 - floor(30 / 4) = 23,
+    # 11 iterations of 2 renders and its final render; the adaptive search the other 7.
+    cmd = [sys.executable, str(EXAMPLE), "--method", "polished", "--out", str(out), "--iterations", "15",
+           "--scale", "0.125", "--spp", "8", "--eval-every", "2", "--seed", "4", "--progress", "0"]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=REPO)
+    assert p.returncode == 0, p.stderr[-3000:]
+    for f in ("target.png", "initial.png", "final.png", "convergence.png", "history.csv", "summary.json"):
+        assert (out / f).is_file(), f
+    assert not (out / "ad_history.csv").exists()  # no Mitsuba AD
+    s = json.loads((out / "summary.json").read_text())
+    assert s["method"] == "polished" and s["seed"] == 4 and s["budget"] == 30 and s["polish"] == 0.25
+    # The paper loop's settings (Table 1), as the paper-loop runs record them.
+    assert (s["samples"], s["lr"], s["sigma0"], s["anneal"], s["sampling"]) == (2, 0.02, 0.5, "paper", "radial")
+    assert s["optimiser"].startswith("plateau") and s["nfev"] == 30 and s["loop_renders"] == 23
+    for k in ("param_mse", "image_mse", "seconds_per_iteration", "seconds_per_evaluation", "best_loss"):
+        assert math.isfinite(s[k]), k
+    rows = list(csv.DictReader(open(out / "history.csv")))
+    phases = [r["phase"] for r in rows]
+    loop = phases.count("loop")
+    assert loop == 12 and phases == ["loop"] * loop + ["polish"] * (len(rows) - loop) and len(rows) > loop
+    assert [int(r["population"]) for r in rows[:loop]] == [2] * 11 + [1]
+    assert int(rows[loop - 1]["renders"]) == 23
+    assert int(rows[-1]["renders"]) == s["nfev"] == sum(int(r["population"]) for r in rows)
+    assert s["nit"] == len(rows) - 1  # the loop's 11 iterations, then one per generation
+    best = [float(r["best_loss"]) for r in rows]
+    assert all(b <= a for a, b in zip(best, best[1:]))
+    assert s["best_loss"] == pytest.approx(best[-1], rel=1e-6)
+    assert s["image_mse"] == pytest.approx(s["best_loss"], rel=1e-6)
+    assert s["final_theta"] == pytest.approx([float(rows[-1]["theta0"]), float(rows[-1]["theta1"])], rel=1e-6)
+
+
+def test_polish_is_an_option_of_method_polished(tmp_path):
+    for extra in (["--method", "adaptive", "--polish", "0.5"], ["--method", "polished", "--polish", "1"]):
+        p = subprocess.run([sys.executable, str(EXAMPLE), *extra, "--out", str(tmp_path / "x")],
+                           capture_output=True, text=True, timeout=300, cwd=REPO)
+        assert p.returncode == 2 and "--polish" in p.stderr, p.stderr
+    assert not (tmp_path / "x").exists()
+
+
 def test_a_folder_holds_one_methods_runs(tmp_path):
     out = tmp_path / "study"
     (out / "seed-0").mkdir(parents=True)
@@ -159,15 +203,18 @@ def test_a_folder_holds_one_methods_runs(tmp_path):
     assert "not 'adaptive'" in p.stderr and "own --out" in p.stderr
 
 
-def test_adaptive_page_compares_per_seed_and_names_seeds_not_run(tmp_path):
-    """--page-only with --method adaptive: the page from the runs alone (no mitsuba needed)."""
+@pytest.mark.parametrize("method", ["adaptive", "polished"])
+def test_adaptive_page_compares_per_seed_and_names_seeds_not_run(tmp_path, method):
+    """--page-only with --method adaptive (or polished): the page from the runs alone (no
+    mitsuba needed)."""
     out, paper = tmp_path / "mitsuba-adaptive", tmp_path / "mitsuba"
     hist = "iteration,population,renders,sigma,loss,best_loss,param_mse,image_mse,seconds,theta0,theta1\n"
     for s, pm in ((0, 1e-5), (2, 3.0)):
         d = out / f"seed-{s}"
         d.mkdir(parents=True)
-        (d / "summary.json").write_text(json.dumps({
-            "method": "adaptive", "seed": s, "budget": 800, "nit": 120, "nfev": 800, "restarts": 1,
+        extra = {"polish": 0.25, "loop_renders": 599, "lr": 0.02, "samples": 2} if method == "polished" else {}
+        (d / "summary.json").write_text(json.dumps(extra | {
+            "method": method, "seed": s, "budget": 800, "nit": 120, "nfev": 800, "restarts": 1,
             "param_mse": pm, "image_mse": 2e-5, "seconds_per_iteration": 6.0, "seconds_per_evaluation": 0.9,
             "load_average_at_start": 4.0, "spp": 32, "sigma0": 0.5, "crn": "fixed", "mitsuba_version": "3.9.1",
             "variant": "llvm_ad_rgb", "optimiser": "plateau 0.1.0"}))
@@ -178,7 +225,7 @@ def test_adaptive_page_compares_per_seed_and_names_seeds_not_run(tmp_path):
         (d / "summary.json").write_text(json.dumps({"seed": s, "param_mse": pm, "seconds_per_iteration": 4.8,
                                                     "samples": 2}))
     page = tmp_path / "page.md"
-    p = subprocess.run([sys.executable, str(EXAMPLE), "--method", "adaptive", "--seeds", "3", "--page-only",
+    p = subprocess.run([sys.executable, str(EXAMPLE), "--method", method, "--seeds", "3", "--page-only",
                         "--out", str(out), "--plateau-runs", str(paper), "--page", str(page)],
                        capture_output=True, text=True, timeout=300, cwd=REPO)
     assert p.returncode == 0, p.stderr[-3000:]
@@ -189,5 +236,13 @@ def test_adaptive_page_compares_per_seed_and_names_seeds_not_run(tmp_path):
     assert rows["1"][0] == "not run" and rows["1"][8] == "5.8"
     assert rows["2"][0] == "3" and rows["2"][2] == "120" and rows["2"][4] == "800"
     # Adaptive 1 of the 2 seeds run; the paper loop 2 of those 2, and 2 of 3 in all.
-    assert "**adaptive 1 of 2** seeds run (not run: [1]); the paper's loop 2 of the same 2, 2 of 3 in all" in text
-    assert "--method adaptive --seeds 3" in text
+    assert f"**{method} 1 of 2** seeds run (not run: [1]); the paper's loop 2 of the same 2, 2 of 3 in all" in text
+    assert f"--method {method} --seeds 3" in text
+    if method == "polished":
+        assert text.startswith("# SHADOW on Mitsuba 3: the paper's loop polished by the adaptive search")
+        assert ('`plateau.minimize(fun, x0, method="polished", sigma0=0.5, lr=0.02, samples=2, budget=800, '
+                'polish=0.25, seed=seed, batched=True)`') in text
+        assert "on the first 0.75 of the renders (599, its final render included)" in text
+        assert "| seed | polished: param MSE |" in text and "| seed | target | start | polished | paper loop |" in text
+    else:
+        assert "adaptive" in text.splitlines()[0] and "polished" not in text

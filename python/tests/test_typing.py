@@ -1,5 +1,6 @@
-"""The package's types hold together: ``__init__.py`` and ``ray.py`` are typed inline, the extension by
-``_plateau.pyi``, and mypy in strict mode checks the one against the other."""
+"""The package's types hold together: its modules (``__init__.py``, ``_minimize.py``, ...,
+``ray.py``) are typed inline, the extension by ``_plateau.pyi``, and mypy in strict mode checks
+the one against the other."""
 
 import os
 import subprocess

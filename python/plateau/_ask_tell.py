@@ -1,0 +1,224 @@
+""":func:`ask_tell` and :class:`AskTell`: the runs of :func:`plateau.minimize` with the points
+evaluated by the caller."""
+
+from __future__ import annotations
+
+from typing import Any, Literal, Optional, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from . import _plateau
+from ._options import _adaptive_options, _choose_method, _PaperOptions, _polished_options
+from ._plateau import Annealer, PlateauFreeGradient
+from ._result import OptimizeResult, _adaptive_result, _paper_result
+from ._types import _Bounds, _FloatArray, _SamplingName, _ScheduleName
+
+
+class AskTell:
+    """An optimisation run whose points the caller evaluates: ask and tell.
+
+    Made by :func:`ask_tell`. Each :meth:`ask` hands out one iteration's points and their
+    seeds; each :meth:`tell` takes their values back, finishes the estimate and takes the
+    step. The points can be evaluated anywhere, in any order (a queue, a game engine, a
+    render farm). With the options and seed of a :func:`minimize` call, the run and its
+    :attr:`result` are bit for bit that call's.
+
+    Examples
+    --------
+    >>> import numpy as np, plateau
+    >>> es = plateau.ask_tell([0.0, 0.0, 0.0], budget=600, seed=3)
+    >>> while not es.done:
+    ...     X, seeds = es.ask()
+    ...     es.tell([float(np.sum((np.round(x) - 1.0) ** 2)) for x in X])
+    >>> es.result.fun
+    0.0
+    """
+
+    __slots__ = ("_raw", "_method")
+
+    def __init__(self, raw: Any, method: str) -> None:
+        self._raw = raw
+        self._method = method
+
+    @property
+    def method(self) -> str:
+        """``'adaptive'``, ``'plateau'`` (the paper's loop) or ``'polished'``."""
+        return self._method
+
+    @property
+    def done(self) -> bool:
+        """Whether the run has ended (:attr:`result` is ready; :meth:`ask` has nothing more)."""
+        return bool(self._raw.done)
+
+    @property
+    def nfev(self) -> int:
+        """Evaluations told so far."""
+        return int(self._raw.nfev)
+
+    def ask(self) -> tuple[_FloatArray, npt.NDArray[np.uint64]]:
+        """The next points and their seeds: ``X`` of shape ``(k, *x0.shape)`` (float64) and
+        ``seeds``, a uint64 array of length ``k``.
+
+        The adaptive search asks for one generation (one seed for all its points, a new one
+        each generation); the paper's loop for one gradient estimate (one seed per
+        antithetic pair) and, last, for its final point alone (with ``seed``);
+        ``'polished'`` for the paper loop's, then the adaptive search's. An objective
+        with noise of its own should use the seeds (common random numbers): they are the
+        seeds a ``seeded=True`` ``fun`` receives from :func:`minimize`.
+
+        Raises
+        ------
+        ValueError
+            Asked twice without a tell in between, or asked after the run has ended.
+        """
+        out: Optional[tuple[_FloatArray, npt.NDArray[np.uint64]]] = self._raw.ask()
+        if out is None:
+            raise ValueError("the run has ended: nothing more to ask (see result)")
+        return out
+
+    def tell(self, values: npt.ArrayLike) -> None:
+        """Tells the values of the asked points, in the order of ``X``: ``k`` floats.
+
+        Raises
+        ------
+        ValueError
+            Nothing asked, the wrong number of values, or a NaN or an infinity (naming the
+            evaluation, the value and the point). After a ValueError the same points still
+            wait for their values.
+        """
+        array = np.asarray(values, dtype=np.float64).reshape(-1)
+        self._raw.tell(array.tolist())
+
+    @property
+    def best(self) -> Optional[tuple[_FloatArray, float]]:
+        """``(x, fun)``, the best point told so far and its value (``method='adaptive'`` or
+        ``'polished'``); None before the first value and for the paper's loop."""
+        best: Optional[tuple[_FloatArray, float]] = self._raw.best()
+        return best
+
+    @property
+    def result(self) -> OptimizeResult:
+        """The result, as :func:`minimize` returns it.
+
+        Raises
+        ------
+        ValueError
+            The run has not ended: ask and tell until :attr:`done`.
+        """
+        raw = self._raw.result()
+        if raw is None:
+            raise ValueError(
+                f"the run has not ended ({self.nfev} evaluations told): ask and tell until done"
+            )
+        if self._method in ("adaptive", "polished"):
+            return _adaptive_result(raw)
+        return _paper_result(raw, raw["final_value"])
+
+    def __repr__(self) -> str:
+        state = "done" if self.done else "running"
+        return f"AskTell(method={self._method!r}, {state}, {self.nfev} evaluations told)"
+
+
+def ask_tell(
+    x0: npt.ArrayLike,
+    *,
+    budget: Optional[int] = None,
+    method: Optional[Literal["adaptive", "plateau", "paper", "polished"]] = None,
+    seed: int = 0,
+    sigma0: Optional[float] = None,
+    bounds: Optional[_Bounds] = None,
+    target: Optional[float] = None,
+    population: Optional[int] = None,
+    restarts: bool = True,
+    polish: Optional[float] = None,
+    iterations: Optional[int] = None,
+    lr: Optional[float] = None,
+    samples: Optional[int] = None,
+    sampling: Optional[_SamplingName] = None,
+    antithetic: Optional[bool] = None,
+    orthogonal: Optional[bool] = None,
+    annealer: Union[_ScheduleName, Annealer, None] = None,
+    sigma_min: Optional[float] = None,
+    record_x: Optional[bool] = None,
+    final_evaluation: Optional[bool] = None,
+) -> AskTell:
+    """:func:`minimize` without ``fun``: an :class:`AskTell` run whose points you evaluate.
+
+    The options, their defaults and the choice of method are :func:`minimize`'s
+    (``method='adaptive'``, the default with ``budget`` and none of the paper loop's options,
+    ``'plateau'`` -- also spelt ``'paper'`` -- the paper's loop, or ``'polished'``, the
+    paper's loop then the adaptive search, with ``polish``). With the same options and
+    seed, ``ask_tell(x0, ...).result`` after the loop below is ``minimize(fun, x0, ...)``, bit
+    for bit::
+
+        es = plateau.ask_tell(x0, budget=2000, seed=1)
+        while not es.done:
+            X, seeds = es.ask()                     # (k, *x0.shape) float64, k uint64 seeds
+            es.tell([fun(x) for x in X])            # or fun(x, s) for a seeded fun
+        result = es.result                           # OptimizeResult, as minimize returns
+
+    The baselines (``method='fd'``, ``'spsa'``), ``callback`` and ``parallel`` are
+    :func:`minimize`'s alone: the caller evaluates, and can stop whenever it likes.
+
+    Raises
+    ------
+    ValueError
+        Bad input, as :func:`minimize`.
+    """
+    x0_array = np.asarray(x0, dtype=np.float64)
+    paper_only = {
+        "iterations": iterations,
+        "lr": lr,
+        "samples": samples,
+        "sampling": sampling,
+        "antithetic": antithetic,
+        "orthogonal": orthogonal,
+        "annealer": annealer,
+        "sigma_min": sigma_min,
+        "record_x": record_x,
+        "final_evaluation": final_evaluation,
+    }
+    chosen = _choose_method(method, budget, sigma0, paper_only, polish)
+    if chosen == "adaptive":
+        options = _adaptive_options(
+            budget, seed, sigma0, bounds, target, population, restarts, x0_array.shape
+        )
+        raw = _plateau._AskTell.adaptive(x0_array, options)
+        return AskTell(raw, "adaptive")
+    if chosen == "polished":
+        paper, fraction = _polished_options(sigma0, lr, samples, polish)
+        options = _adaptive_options(
+            budget, seed, None, bounds, target, population, restarts, x0_array.shape,
+            paper=paper, polish=fraction,
+        )
+        return AskTell(_plateau._AskTell.adaptive(x0_array, options), "polished")
+    if chosen not in ("plateau", "paper"):
+        raise ValueError(
+            f"method = {chosen!r} is not a method of ask_tell: use 'adaptive', 'plateau' or 'polished' "
+            "(the baselines 'fd' and 'spsa' are minimize's alone)"
+        )
+    o = _PaperOptions.given(sigma0, paper_only)
+    # The estimator's own checks, with its messages (it is never evaluated).
+    PlateauFreeGradient(
+        lambda x: 0.0,
+        samples=o.samples,
+        sampling=o.sampling,
+        antithetic=o.antithetic,
+        orthogonal=o.orthogonal,
+    )
+    iterations, annealer, adam = o.schedule(budget, o.samples, bounds, x0_array.shape)
+    raw = _plateau._AskTell.paper(
+        x0_array,
+        adam,
+        annealer,
+        iterations,
+        samples=o.samples,
+        sampling=o.sampling,
+        antithetic=o.antithetic,
+        orthogonal=o.orthogonal,
+        seed=seed,
+        record_x=o.record_x,
+        final_evaluation=o.final_evaluation,
+    )
+    return AskTell(raw, "plateau")

@@ -1,0 +1,164 @@
+"""`minimize(fun, x0, method='polished', budget=...)`: the paper's loop on the first
+`1 - polish` of the budget, then the adaptive search from its best point (the Rust
+`Minimizer::strategy(Strategy::Paper {..}).polish(..)`)."""
+
+import math
+
+import numpy as np
+import pytest
+
+import plateau
+from plateau import _plateau
+from helpers import staircase, staircase_batch, staircase_seeded
+
+TIP = np.array([0.3, -0.2])
+START = [1.5, 0.8]  # 1.6 from the tip: on the plateau
+LOOP = {"samples": 2, "lr": 0.02, "sigma0": 1.0}
+
+
+def cone_in_a_plateau(x):
+    """A cone of radius 1 in a plateau, as an image loss near its optimum: the distance to the
+    tip inside, 1 outside."""
+    return min(math.sqrt(float(np.sum((x - TIP) ** 2))), 1.0)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_the_polish_finishes_the_papers_loop(seed):
+    polished = plateau.minimize(
+        cone_in_a_plateau, START, method="polished", budget=800, seed=seed, **LOOP
+    )
+    # The same loop alone: 399 iterations of 2 evaluations and the final one, 799 in all.
+    alone = plateau.minimize(
+        cone_in_a_plateau, START, method="plateau", iterations=399, seed=seed, **LOOP
+    )
+    assert alone.fun < 1.0, f"the loop found the cone: {alone.fun}"
+    assert alone.fun > 1e-7, f"the loop alone hovers around the tip: {alone.fun}"
+    assert polished.fun < 0.1 * alone.fun, (polished.fun, alone.fun)
+    assert polished.fun == cone_in_a_plateau(polished.x)  # the best point seen, its value
+    assert polished.nfev == 800
+    assert polished.nit > 299  # the loop's iterations (600 evaluations), then generations
+    assert polished.message == "budget spent" and polished.status == 0 and polished.success
+    assert isinstance(polished.restarts, int) and polished.sigma > 0.0
+    assert polished.history is None and polished.x.shape == (2,)
+    again = plateau.minimize(
+        cone_in_a_plateau, START, method="polished", budget=800, seed=seed, **LOOP
+    )
+    assert again.x.tobytes() == polished.x.tobytes() and again.fun == polished.fun
+    assert (again.nit, again.nfev, again.sigma) == (polished.nit, polished.nfev, polished.sigma)
+
+
+def same(result, rust):
+    assert result.x.tobytes() == rust["x"].tobytes()
+    assert result.fun == rust["fun"]
+    assert (result.nfev, result.nit) == (rust["nfev"], rust["nit"])
+    assert (result.restarts, result.sigma, result.message) == (
+        rust["restarts"],
+        rust["sigma"],
+        rust["stop"],
+    )
+
+
+@pytest.mark.parametrize("polish", [0.0, 0.25, 0.6])
+def test_bit_identical_to_the_rust_minimizer(polish):
+    x0 = [0.0, 0.0, 0.0]
+    paper = (2, 0.05, 1.5)
+    rust = _plateau._rust_reference_minimize_adaptive(
+        x0, budget=700, seed=3, paper=paper, polish=polish
+    )
+    options = dict(method="polished", budget=700, seed=3, samples=2, lr=0.05, sigma0=1.5)
+    same(plateau.minimize(staircase, x0, polish=polish, **options), rust)
+    same(plateau.minimize(staircase_batch, x0, polish=polish, batched=True, **options), rust)
+    # Ask and tell: the same run, its points evaluated here.
+    es = plateau.ask_tell(x0, polish=polish, **options)
+    assert es.method == "polished"
+    while not es.done:
+        X, _ = es.ask()
+        es.tell([staircase(x) for x in X])
+    same(es.result, rust)
+    assert es.best[1] == rust["fun"]
+
+
+def test_seeded_and_bounded_bit_identical():
+    x0 = [0.5, -0.5, 0.5]
+    bounds = ([-4.0] * 3, [4.0] * 3)
+    rust = _plateau._rust_reference_minimize_adaptive(
+        x0, budget=500, seed=11, bounds=bounds, seeded=True, paper=(2, 0.02, 0.5), polish=0.25
+    )
+    result = plateau.minimize(
+        staircase_seeded, x0, method="polished", budget=500, seed=11, bounds=(-4.0, 4.0), seeded=True
+    )
+    same(result, rust)  # the defaults: samples 2, lr 0.02, sigma0 0.5, polish 0.25
+
+
+def test_callback_sees_every_iteration_and_can_stop():
+    seen = []
+
+    def callback(intermediate_result):
+        seen.append((intermediate_result.nit, intermediate_result.nfev))
+        return intermediate_result.nit == 5
+
+    result = plateau.minimize(
+        cone_in_a_plateau, START, method="polished", budget=800, callback=callback, **LOOP
+    )
+    assert seen == [(k, 2 * k) for k in range(1, 6)]  # one gradient estimate per iteration
+    assert result.message == "stopped by the callback after iteration 5" and result.status == 1
+    assert result.nfev == 10 and result.restarts is None and result.sigma is None
+
+
+def test_target_stops_the_run():
+    result = plateau.minimize(
+        cone_in_a_plateau, START, method="polished", budget=800, target=0.05, **LOOP
+    )
+    assert result.fun <= 0.05 and result.message == "target reached" and result.nfev < 800
+
+
+@pytest.mark.parametrize("polish", [1.0, -0.1, math.nan, math.inf, True, "0.5"])
+def test_bad_polish(polish):
+    with pytest.raises(ValueError, match=r"polish = .* must be a fraction of the budget in \[0, 1\)"):
+        plateau.minimize(cone_in_a_plateau, START, method="polished", budget=100, polish=polish)
+    with pytest.raises(ValueError, match=r"polish = .* must be a fraction"):
+        plateau.ask_tell(START, method="polished", budget=100, polish=polish)
+
+
+@pytest.mark.parametrize("method", [None, "adaptive", "plateau", "fd", "spsa"])
+def test_polish_belongs_to_method_polished(method):
+    with pytest.raises(ValueError, match=r"polish = 0.25: an option of method='polished'"):
+        plateau.minimize(cone_in_a_plateau, START, method=method, budget=100, polish=0.25)
+    if method in (None, "adaptive", "plateau"):
+        with pytest.raises(ValueError, match=r"polish = 0.25: an option of method='polished'"):
+            plateau.ask_tell(START, method=method, budget=100, polish=0.25)
+
+
+def test_options_that_do_not_apply():
+    def run(**options):
+        return plateau.minimize(cone_in_a_plateau, START, method="polished", **options)
+
+    with pytest.raises(ValueError, match="budget: method='polished' needs one"):
+        run()
+    with pytest.raises(ValueError, match="budget: method='polished' needs one"):
+        plateau.ask_tell(START, method="polished")
+    with pytest.raises(ValueError, match="iterations, annealer: options of method='plateau', not of method='polished'"):
+        run(budget=100, iterations=10, annealer="cosine")
+    for name, value in [("sampling", "gaussian"), ("antithetic", False), ("sigma_min", 0.1), ("step", 0.1),
+                        ("orthogonal", True), ("parallel", True), ("record_x", True), ("final_evaluation", False)]:
+        with pytest.raises(ValueError, match=f"{name}: options of method='plateau'"):
+            run(budget=100, **{name: value})
+    with pytest.raises(ValueError, match="checkpoint: supported by the paper's loop"):
+        run(budget=100, checkpoint="never-written.json")
+
+
+def test_bad_loop_options():
+    def run(**options):
+        return plateau.minimize(cone_in_a_plateau, START, method="polished", budget=100, **options)
+
+    for samples in (0, 3, -2, 2.5, True):
+        with pytest.raises(ValueError, match=f"samples = {samples!r} must be an even whole number"):
+            run(samples=samples)
+    for name in ("lr", "sigma0"):
+        for value in (0.0, -1.0, math.nan, math.inf):
+            with pytest.raises(ValueError, match=f"{name} = {value!r} must be a finite number > 0"):
+                run(**{name: value})
+    with pytest.raises(ValueError, match=r"bounds\[0\] = \(-inf, 1.0\): method='polished' needs finite bounds"):
+        run(bounds=[(None, 1.0), (-1.0, 1.0)])
+    with pytest.raises(ValueError, match="population = 1"):
+        run(population=1)
