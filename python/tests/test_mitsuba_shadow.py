@@ -83,6 +83,36 @@ def test_scene_is_the_task_and_renders_deterministically_per_seed():
     assert ms.param_mse(ms.START) == 1.625
 
 
+def short_search_run(tmp_path: Path, method: str) -> tuple[dict, list[dict]]:
+    """A short `--method adaptive|polished` run (2 x 15 = 30 renders at 32x24, seed 4): checks the
+    files and the summary's finite numbers; returns the summary and the history's rows."""
+    out = tmp_path / method
+    cmd = [sys.executable, str(EXAMPLE), "--method", method, "--out", str(out), "--iterations", "15",
+           "--scale", "0.125", "--spp", "8", "--eval-every", "2", "--seed", "4", "--progress", "0"]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=REPO)
+    assert p.returncode == 0, p.stderr[-3000:]
+    for f in ("target.png", "initial.png", "final.png", "convergence.png", "history.csv", "summary.json"):
+        assert (out / f).is_file(), f
+    assert not (out / "ad_history.csv").exists()  # these methods run no Mitsuba AD
+    s = json.loads((out / "summary.json").read_text())
+    assert s["method"] == method and s["seed"] == 4 and s["budget"] == 30
+    assert s["optimiser"].startswith("plateau")
+    for k in ("param_mse", "image_mse", "seconds_per_iteration", "seconds_per_evaluation", "best_loss"):
+        assert math.isfinite(s[k]), k
+    return s, list(csv.DictReader(open(out / "history.csv")))
+
+
+def assert_returns_its_best_render(s: dict, rows: list[dict]) -> None:
+    """The rows follow the best point so far: its loss never grows, and the run returns it, the
+    render with the least image MSE (every render uses the run's seed, so rendering it again
+    gives the same image and loss)."""
+    best = [float(r["best_loss"]) for r in rows]
+    assert all(b <= a for a, b in zip(best, best[1:]))
+    assert s["best_loss"] == pytest.approx(best[-1], rel=1e-6)
+    assert s["image_mse"] == pytest.approx(s["best_loss"], rel=1e-6)
+    assert s["final_theta"] == pytest.approx([float(rows[-1]["theta0"]), float(rows[-1]["theta1"])], rel=1e-6)
+
+
 @needs_mitsuba
 def test_short_run_writes_everything(tmp_path):
     out = tmp_path / "run"
@@ -114,34 +144,13 @@ def test_short_run_writes_everything(tmp_path):
 @pytest.mark.skipif(not HAVE_PLATEAU and not REQUIRE,
                     reason="--method adaptive needs the plateau package (pip install ./python)")
 def test_short_adaptive_run_writes_everything_and_returns_its_best_render(tmp_path):
-    out = tmp_path / "adaptive"
-    # Budget N x iterations = 2 x 15 = 30 renders at 32x24.
-    cmd = [sys.executable, str(EXAMPLE), "--method", "adaptive", "--out", str(out), "--iterations", "15",
-           "--scale", "0.125", "--spp", "8", "--eval-every", "2", "--seed", "4", "--progress", "0"]
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=REPO)
-    assert p.returncode == 0, p.stderr[-3000:]
-    for f in ("target.png", "initial.png", "final.png", "convergence.png", "history.csv", "summary.json"):
-        assert (out / f).is_file(), f
-    assert not (out / "ad_history.csv").exists()  # the adaptive method runs no Mitsuba AD
-    s = json.loads((out / "summary.json").read_text())
-    assert s["method"] == "adaptive" and s["seed"] == 4 and s["budget"] == 30
-    assert s["optimiser"].startswith("plateau")
+    s, rows = short_search_run(tmp_path, "adaptive")
     assert 0 < s["nfev"] <= 30 and s["nit"] >= 2
-    for k in ("param_mse", "image_mse", "seconds_per_iteration", "seconds_per_evaluation", "best_loss"):
-        assert math.isfinite(s[k]), k
     assert s["seconds_per_iteration"] >= s["seconds_per_evaluation"] > 0
-    rows = list(csv.DictReader(open(out / "history.csv")))
     # One row per generation; the renders add up to nfev.
     assert [int(r["iteration"]) for r in rows] == list(range(s["nit"]))
     assert int(rows[-1]["renders"]) == s["nfev"] == sum(int(r["population"]) for r in rows)
-    # The rows follow the best point so far: its loss never grows, and the run returns it, the
-    # render with the least image MSE (every render uses the run's seed, so rendering it again
-    # gives the same image and loss).
-    best = [float(r["best_loss"]) for r in rows]
-    assert all(b <= a for a, b in zip(best, best[1:]))
-    assert s["best_loss"] == pytest.approx(best[-1], rel=1e-6)
-    assert s["image_mse"] == pytest.approx(s["best_loss"], rel=1e-6)
-    assert s["final_theta"] == pytest.approx([float(rows[-1]["theta0"]), float(rows[-1]["theta1"])], rel=1e-6)
+    assert_returns_its_best_render(s, rows)
     assert s["best_loss"] <= s["initial_image_mse"]
     assert s["param_mse"] == pytest.approx(sum((a - b) ** 2 for a, b in zip(s["final_theta"], (-1.5, 1.0))) / 2)
     # The image error of the best point every eval_every x N = 4 renders (and last).
@@ -153,24 +162,13 @@ def test_short_adaptive_run_writes_everything_and_returns_its_best_render(tmp_pa
 @pytest.mark.skipif(not HAVE_PLATEAU and not REQUIRE,
                     reason="--method polished needs the plateau package (pip install ./python)")
 def test_short_polished_run_is_the_loop_then_the_adaptive_search(tmp_path):
-    out = tmp_path / "polished"
     # Budget N x iterations = 2 x 15 = 30 renders at 32x24: the loop gets 30 - floor(30 / 4) = 23,
     # 11 iterations of 2 renders and its final render; the adaptive search the other 7.
-    cmd = [sys.executable, str(EXAMPLE), "--method", "polished", "--out", str(out), "--iterations", "15",
-           "--scale", "0.125", "--spp", "8", "--eval-every", "2", "--seed", "4", "--progress", "0"]
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=REPO)
-    assert p.returncode == 0, p.stderr[-3000:]
-    for f in ("target.png", "initial.png", "final.png", "convergence.png", "history.csv", "summary.json"):
-        assert (out / f).is_file(), f
-    assert not (out / "ad_history.csv").exists()  # no Mitsuba AD
-    s = json.loads((out / "summary.json").read_text())
-    assert s["method"] == "polished" and s["seed"] == 4 and s["budget"] == 30 and s["polish"] == 0.25
+    s, rows = short_search_run(tmp_path, "polished")
+    assert s["polish"] == 0.25
     # The paper loop's settings (Table 1), as the paper-loop runs record them.
     assert (s["samples"], s["lr"], s["sigma0"], s["anneal"], s["sampling"]) == (2, 0.02, 0.5, "paper", "radial")
-    assert s["optimiser"].startswith("plateau") and s["nfev"] == 30 and s["loop_renders"] == 23
-    for k in ("param_mse", "image_mse", "seconds_per_iteration", "seconds_per_evaluation", "best_loss"):
-        assert math.isfinite(s[k]), k
-    rows = list(csv.DictReader(open(out / "history.csv")))
+    assert s["nfev"] == 30 and s["loop_renders"] == 23
     phases = [r["phase"] for r in rows]
     loop = phases.count("loop")
     assert loop == 12 and phases == ["loop"] * loop + ["polish"] * (len(rows) - loop) and len(rows) > loop
@@ -178,11 +176,7 @@ def test_short_polished_run_is_the_loop_then_the_adaptive_search(tmp_path):
     assert int(rows[loop - 1]["renders"]) == 23
     assert int(rows[-1]["renders"]) == s["nfev"] == sum(int(r["population"]) for r in rows)
     assert s["nit"] == len(rows) - 1  # the loop's 11 iterations, then one per generation
-    best = [float(r["best_loss"]) for r in rows]
-    assert all(b <= a for a, b in zip(best, best[1:]))
-    assert s["best_loss"] == pytest.approx(best[-1], rel=1e-6)
-    assert s["image_mse"] == pytest.approx(s["best_loss"], rel=1e-6)
-    assert s["final_theta"] == pytest.approx([float(rows[-1]["theta0"]), float(rows[-1]["theta1"])], rel=1e-6)
+    assert_returns_its_best_render(s, rows)
 
 
 def test_polish_is_an_option_of_method_polished(tmp_path):
