@@ -96,7 +96,8 @@ fn run_in(args: &[String]) -> (Option<i32>, String) {
 /// A run stopped after k iterations (the Ctrl-C path, through the hidden `--stop-after`)
 /// exits 130 with its outputs written and marked interrupted, prints the command that
 /// resumes; continued with `--resume`, it ends bit-identical to the run left alone: for the
-/// paper's loop with each renderer-seed rule, finite differences, and the adaptive search.
+/// paper's loop with each renderer-seed rule, finite differences, the adaptive search and the
+/// polished loop (stopped inside the loop; the polish runs after the resume).
 #[test]
 fn an_interrupted_run_resumed_equals_the_run_left_alone() {
     for (tag, extra) in [
@@ -113,6 +114,10 @@ fn an_interrupted_run_resumed_equals_the_run_left_alone() {
                 "--crn",
                 "pair",
             ][..],
+        ),
+        (
+            "polished",
+            &["--iterations", "40", "--method", "polished"][..],
         ),
     ] {
         let base: Vec<String> = ["optimize", "shadow", "--scale", "0.125", "--spp", "2"]
