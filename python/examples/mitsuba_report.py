@@ -57,7 +57,7 @@ def run_pathtracer_seed(seed: int, results: Path) -> None:
 
     out = results / "mitsuba" / "pathtracer" / f"seed-{seed}"
     cmd = ["cargo", "run", "--release", "-q", "-p", "pathtracer", "--", "optimize", "shadow",
-           "--seed", str(seed), "--out", str(out)]
+           "--method", "plateau", "--seed", str(seed), "--out", str(out)]
     print("running", " ".join(cmd), file=sys.stderr, flush=True)
     subprocess.run(cmd, cwd=REPO, check=True)
 

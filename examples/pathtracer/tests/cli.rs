@@ -101,8 +101,11 @@ fn run_in(args: &[String]) -> (Option<i32>, String) {
 #[test]
 fn an_interrupted_run_resumed_equals_the_run_left_alone() {
     for (tag, extra) in [
-        ("fixed", &["--iterations", "12"][..]),
-        ("pair", &["--iterations", "12", "--crn", "pair"][..]),
+        ("fixed", &["--iterations", "12", "--method", "plateau"][..]),
+        (
+            "pair",
+            &["--iterations", "12", "--crn", "pair", "--method", "plateau"][..],
+        ),
         ("fd", &["--iterations", "6", "--method", "fd"][..]),
         (
             "adaptive",
@@ -188,8 +191,10 @@ fn bad_checkpoints_are_refused_before_any_work() {
         "4",
         "--quiet",
     ];
+    // The paper's loop (not the default polished one): its checkpoint has the fields below.
     let mut args = vec!["optimize", "shadow", "--out", &d, "--checkpoint-every", "0"];
     args.extend(small);
+    args.extend(["--method", "plateau"]);
     assert_eq!(run(&args).0, Some(0));
     let good = std::fs::read_to_string(dir.join("checkpoint.json")).unwrap();
     let listing = |d: &std::path::Path| {
@@ -231,6 +236,9 @@ fn bad_checkpoints_are_refused_before_any_work() {
         let mut args = vec!["optimize", "shadow"];
         args.extend(small);
         args.extend(&more);
+        if !more.contains(&"--method") {
+            args.extend(["--method", "plateau"]);
+        }
         if !more.contains(&"--resume") {
             args.extend(["--resume", &d]);
         }
@@ -291,6 +299,8 @@ fn ctrl_c_writes_everything_exits_130_and_resumes_bit_identical() {
         "--eval-every",
         "10",
         "--quiet",
+        "--method",
+        "plateau",
     ];
     let mut child = Command::new(env!("CARGO_BIN_EXE_pathtracer"))
         .args(base)
@@ -355,6 +365,8 @@ fn a_second_ctrl_c_exits_at_once() {
             "64",
             "--iterations",
             "50",
+            "--method",
+            "plateau",
             "--quiet",
             "--checkpoint-every",
             "1",

@@ -24,9 +24,10 @@ pub(super) struct Args {
     /// the median and the range.
     #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = values::at_least(1u64))]
     seeds: u64,
-    /// The method of the runs: plateau (the paper's loop: plateau-free gradient, Adam, the
-    /// paper's annealing) or adaptive (the library's Minimizer with the same evaluations)
-    /// [default: plateau].
+    /// The method of the runs: polished (the paper's loop, then the library's adaptive search
+    /// from its best point, on the same evaluations), plateau (the paper's loop alone: the
+    /// reproduction of Table 2) or adaptive (the library's Minimizer alone) [default:
+    /// polished].
     #[arg(long, value_enum)]
     method: Option<Method>,
     /// Skip the finite-difference baseline.
@@ -49,7 +50,7 @@ pub(super) fn run(args: Args) -> Result<()> {
             args.quick,
             args.tasks.as_deref(),
             args.seeds,
-            args.method.unwrap_or(Method::Plateau),
+            args.method.unwrap_or(Method::TASK_DEFAULT),
             !args.no_baseline,
             &Limits {
                 stop_after: args.stop_after,
@@ -123,10 +124,7 @@ fn all(
         } else {
             String::new()
         },
-        match method {
-            Method::Plateau => String::new(),
-            m => format!(" --method {}", m.as_arg()),
-        },
+        format!(" --method {}", method.as_arg()),
         if baseline { "" } else { " --no-baseline" },
         only.map_or(String::new(), |t| format!(" --tasks {}", t.join(","))),
         out.display()

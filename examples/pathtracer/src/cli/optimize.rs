@@ -62,10 +62,12 @@ struct RunOptions {
     /// Ablation: constant sigma = sigma0 [default: the paper's annealing].
     #[arg(long)]
     no_anneal: bool,
-    /// How the gradient is obtained: plateau (the paper's), fd (central finite differences)
-    /// or spsa, all in the paper's loop (Adam, annealing); or adaptive: the library's
-    /// Minimizer (no loop, no learning rate) with the same N x iterations evaluations,
-    /// sigma0, bounds and seed [default: plateau].
+    /// polished: the paper's loop (plateau-free gradient, Adam, annealing) on three quarters
+    /// of the N x iterations evaluations, then the library's adaptive search from its best
+    /// point; plateau: the paper's loop alone; fd (central finite differences) or spsa in the
+    /// paper's loop; adaptive: the library's Minimizer alone (no loop, no learning rate) with
+    /// the same evaluations, sigma0, bounds and seed [default: polished; plateau with
+    /// --budget].
     #[arg(long, value_enum)]
     method: Option<Method>,
     /// Renderer seeds: fixed (every render uses the run's seed, as the paper's code) or pair
@@ -89,6 +91,16 @@ struct RunOptions {
 }
 
 impl RunOptions {
+    /// `--method`, or the default: [`Method::TASK_DEFAULT`], the paper's loop with a time
+    /// budget.
+    fn method(&self) -> Method {
+        match (self.method, self.budget) {
+            (Some(method), _) => method,
+            (None, Some(_)) => Method::Plateau,
+            (None, None) => Method::TASK_DEFAULT,
+        }
+    }
+
     /// The task's defaults with these overrides.
     fn settings(&self, task: &Task) -> Settings {
         let mut s = Settings::defaults(task);
@@ -104,7 +116,7 @@ impl RunOptions {
         s.scale = o.render.scale;
         s.antithetic = !o.no_antithetic;
         s.anneal = !o.no_anneal;
-        s.method = o.method.unwrap_or(s.method);
+        s.method = o.method();
         s.crn = o.crn.unwrap_or(s.crn);
         s.fd_step = o.fd_step.unwrap_or(s.fd_step);
         s.eval_every = o
@@ -129,8 +141,7 @@ pub(super) fn run(args: Args) -> Result<()> {
     } = args;
     let task = find_task(&task)?;
     let samples = opts.samples.unwrap_or(task.defaults().samples);
-    let plateau = opts.method.unwrap_or(Method::Plateau) == Method::Plateau;
-    if plateau && samples % 2 == 1 && !opts.no_antithetic {
+    if opts.method().pairs() && samples % 2 == 1 && !opts.no_antithetic {
         return Err(usage(format!(
             "--samples {samples}: antithetic pairs need an even number; allowed: an even count, or add --no-antithetic"
         )));

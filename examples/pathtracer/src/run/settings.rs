@@ -125,6 +125,19 @@ impl Settings {
 }
 
 impl Method {
+    /// What `optimize` and `all` run without `--method`: the paper's loop polished by the
+    /// adaptive search, which reached the paper's parameter MSE on more seeds of SHADOW and CUP
+    /// than the loop alone (`docs/convergence.md`, table 8). With `--budget` (a time budget,
+    /// which only the paper's loop supports) it is [`Method::Plateau`]. The reproduction pages
+    /// (Table 2, the ablation, Fig. 1-4) build their runs from [`Settings::defaults`], the
+    /// paper's loop.
+    pub const TASK_DEFAULT: Method = Method::Polished;
+
+    /// Whether the method draws antithetic pairs (and so needs an even N).
+    pub fn pairs(self) -> bool {
+        matches!(self, Method::Plateau | Method::Polished)
+    }
+
     /// The spelling of `--method` for this method.
     pub fn as_arg(self) -> &'static str {
         match self {
