@@ -117,14 +117,14 @@ fn all(
     limits: &Limits,
 ) -> Result<()> {
     let command = format!(
-        "cargo run --release -p pathtracer -- all{}{}{}{}{} --out {}",
+        "cargo run --release -p pathtracer -- all{}{} --method {}{}{} --out {}",
         if quick { " --quick" } else { "" },
         if seeds > 1 {
             format!(" --seeds {seeds}")
         } else {
             String::new()
         },
-        format!(" --method {}", method.as_arg()),
+        method.as_arg(),
         if baseline { "" } else { " --no-baseline" },
         only.map_or(String::new(), |t| format!(" --tasks {}", t.join(","))),
         out.display()
