@@ -11,6 +11,14 @@ use rayon::prelude::*;
 use super::Panic;
 use crate::objective::{Objective, Points};
 
+/// One estimate's points, the objective's seed for each, and the values to fill in: what an
+/// evaluator gets.
+pub(super) struct Batch<'a> {
+    pub(super) points: Points<'a>,
+    pub(super) seeds: &'a [u64],
+    pub(super) out: &'a mut [f64],
+}
+
 /// A panic's message, cut to 200 characters (a payload that is not text is named as such).
 pub(super) fn panic_message(payload: &(dyn Any + Send)) -> String {
     let text = if let Some(s) = payload.downcast_ref::<&str>() {
@@ -29,11 +37,10 @@ pub(super) fn panic_message(payload: &(dyn Any + Send)) -> String {
 
 pub(super) fn evaluate_sequential<F: Objective>(
     f: &F,
-    points: Points<'_>,
-    seeds: &[u64],
-    out: &mut [f64],
+    b: Batch<'_>,
     catch: bool,
 ) -> Result<(), Panic> {
+    let Batch { points, seeds, out } = b;
     if catch {
         // Unwind safety: `out` is scratch that every estimate overwrites before reading, and
         // the estimator's counter is already advanced; nothing half-written is used again.
@@ -46,11 +53,10 @@ pub(super) fn evaluate_sequential<F: Objective>(
 
 pub(super) fn evaluate_parallel<F: Objective + Sync>(
     f: &F,
-    points: Points<'_>,
-    seeds: &[u64],
-    out: &mut [f64],
+    b: Batch<'_>,
     catch: bool,
 ) -> Result<(), Panic> {
+    let Batch { points, seeds, out } = b;
     if !catch {
         out.par_iter_mut()
             .enumerate()

@@ -2,7 +2,7 @@
 
 use std::fmt;
 
-use super::evaluate::{evaluate_parallel, evaluate_sequential, panic_message};
+use super::evaluate::{evaluate_parallel, evaluate_sequential, panic_message, Batch};
 use super::steps::{Spreads, Uniform};
 use super::{Core, Estimate, GradientEstimator, OnFailure, Panic};
 use crate::ask_tell::NoObjective;
@@ -13,7 +13,7 @@ use crate::sampling::Sampling;
 
 /// Evaluates the objective at the points; with `catch`, a panic of `f` is caught and
 /// returned as its payload.
-type Evaluator<F> = fn(&F, Points<'_>, &[u64], &mut [f64], bool) -> Result<(), Panic>;
+type Evaluator<F> = fn(&F, Batch<'_>, bool) -> Result<(), Panic>;
 
 /// The plateau-free gradient of an objective `f`: the gradient of `f` smoothed by a
 /// Gaussian of spread `sigma` in parameter space, estimated from `samples` evaluations of `f`.
@@ -110,8 +110,8 @@ impl PlateauFreeGradient<NoObjective> {
             objective: NoObjective,
             core: Core::default(),
             // Never called (`estimate` needs an `Objective`), and harmless if it were.
-            evaluator: |_, _, _, out, _| {
-                out.fill(f64::NAN);
+            evaluator: |_, batch, _| {
+                batch.out.fill(f64::NAN);
                 Ok(())
             },
         }
@@ -244,13 +244,13 @@ impl<F: Objective> PlateauFreeGradient<F> {
         loop {
             self.core.draw(theta, spreads, &mut pending)?;
             let b = &mut self.core.buffers;
-            let evaluated = (self.evaluator)(
-                &self.objective,
-                Points::new(&b.points, theta.len()),
-                &b.seeds,
-                &mut b.values,
-                self.core.settings.catch_panics,
-            );
+            let batch = Batch {
+                points: Points::new(&b.points, theta.len()),
+                seeds: &b.seeds,
+                out: &mut b.values,
+            };
+            let evaluated =
+                (self.evaluator)(&self.objective, batch, self.core.settings.catch_panics);
             if let Err(payload) = evaluated {
                 return Err(Error::ObjectivePanicked {
                     estimate: pending.index,

@@ -72,7 +72,7 @@ fn page(dirs: &[PathBuf]) -> String {
                 .iter()
                 .flatten()
                 .next()
-                .map_or("-".into(), summarize::method_label);
+                .map_or("no runs".into(), summarize::method_label);
             format!("{method} (`{}`)", dir.display())
         };
         let mut header = vec!["seed".to_string()];
