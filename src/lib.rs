@@ -24,6 +24,8 @@
 //! - [`minimize`]`(f, x0, budget)`: the first thing to try, with no step size or learning rate
 //!   to choose; [`Minimizer`] for options (bounds, seed, target, the paper's loop). A Gaussian
 //!   search distribution whose spread and metric adapt to `f`, with restarts.
+//!   [`Minimizer::polish`] runs the paper's loop and then this search from its best point
+//!   (what the path-tracing tasks run by default).
 //! - [`PlateauFreeGradient`]: the estimator for any `Fn(&[f64]) -> f64`, a seeded closure
 //!   ([`Seeded`], for common random numbers), a batch closure ([`Batch`]) or any
 //!   [`Objective`]; returns an [`Estimate`].
