@@ -150,6 +150,10 @@ def test_an_actor_killed_during_an_estimate_gives_the_identical_result(slow_pool
         deadline = time.monotonic() + 60
         while len(os.listdir(markers)) < started + 3 and time.monotonic() < deadline:
             time.sleep(0.01)
+        # A quarter of an evaluation later both actors are inside one (an actor that has just
+        # finished a chunk waits a few milliseconds, more on a loaded machine, for its next
+        # one: killed in that gap it loses no point, and nothing would run again).
+        time.sleep(COST / 4)
         ray.kill(victim)
 
     killer = threading.Thread(target=kill_mid_estimate)
@@ -160,8 +164,11 @@ def test_an_actor_killed_during_an_estimate_gives_the_identical_result(slow_pool
 
     assert slow_pool.replacements == replacements + 1
     assert slow_pool.actors[0] is not victim
-    # The killed actor's unfinished point ran again: more than 8 evaluations started.
-    assert len(os.listdir(markers)) - started > SAMPLES
+    # Every point started at least once. When the kill lands inside an evaluation (the usual
+    # case: see kill_mid_estimate) that point ran again on the replacement, and more than 8
+    # started; on a loaded machine the kill can still land between two chunks, and then no
+    # point is lost and none runs twice. Either way the estimate is the sequential one.
+    assert len(os.listdir(markers)) - started >= SAMPLES
     np.testing.assert_array_equal(g, expected[0])
     # The replacement takes part in the next estimate.
     np.testing.assert_array_equal(grad.estimate(X0, SIGMA), expected[1])
