@@ -424,10 +424,6 @@ fn the_polish_finishes_the_papers_loop() {
             polished.fun < 0.1 * alone.fun,
             "seed {seed}: {polished:?} ({alone:?})"
         );
-        eprintln!(
-            "seed {seed}: alone {:e}, polished {:e}",
-            alone.fun, polished.fun
-        );
         assert_eq!(polished.evaluations, 800);
         // 600 evaluations: 299 loop iterations and the final one, then the generations.
         assert!(polished.iterations > 299, "{polished:?}");
