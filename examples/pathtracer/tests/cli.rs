@@ -1,7 +1,7 @@
 //! The built `pathtracer` binary refuses a bad command line before any work: exit code 2,
 //! one line on stderr naming the argument, the value and what is allowed, and no files.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// A fresh path in the temporary directory that does not exist yet.
@@ -425,15 +425,29 @@ fn impossible_combinations_exit_2_before_any_work() {
 
 #[test]
 fn the_seeds_page_puts_studies_side_by_side() {
-    // The paper loop's committed seeds study (docs/results/seeds-paper): SHADOW and CUP on
-    // seeds 0-9, 8 and 2 of them at or below the paper's parameter MSE.
-    let runs = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../docs/results/seeds-paper"
-    );
+    // The paper loop's committed seeds study (docs/results/seeds-paper), its SHADOW and CUP
+    // runs copied alone (summaries only): seeds 0-9 each, 8 and 2 of them at or below the
+    // paper's parameter MSE, 7 and 7 at or below its image MSE.
+    let committed = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/results/seeds-paper");
+    let runs = fresh("seeds-runs");
+    for task in ["shadow", "cup"] {
+        for k in 0..10 {
+            let name = match k {
+                0 => task.to_string(),
+                k => format!("{task}-seed{k}"),
+            };
+            std::fs::create_dir_all(runs.join(&name)).unwrap();
+            std::fs::copy(
+                committed.join(&name).join("summary.json"),
+                runs.join(&name).join("summary.json"),
+            )
+            .expect("the committed study has this run");
+        }
+    }
     let page = fresh("seeds").join("seeds.md");
     let page_arg = page.display().to_string();
-    let (code, stderr) = run(&["seeds", "--runs", runs, "--page", &page_arg]);
+    let runs_arg = runs.display().to_string();
+    let (code, stderr) = run(&["seeds", "--runs", &runs_arg, "--page", &page_arg]);
     assert_eq!(code, Some(0), "{stderr}");
     let md = std::fs::read_to_string(&page).expect("the page is written");
     assert!(
@@ -443,10 +457,16 @@ fn the_seeds_page_puts_studies_side_by_side() {
     assert!(md.contains("## CUP"), "{md}");
     assert!(md.contains("| at or below the paper | 8 of 10 |"), "{md}");
     assert!(md.contains("| at or below the paper | 2 of 10 |"), "{md}");
+    assert!(
+        md.contains("| image MSE at or below the paper's (1.74e-5) | 7 of 10 |")
+            && md.contains("| image MSE at or below the paper's (4.92e-6) | 7 of 10 |"),
+        "{md}"
+    );
     // Seed 1 of SHADOW left the frame (5.63), seed 0 did not (2.21e-7, bold).
     assert!(
         md.contains("| 1 | 5.63e0 |") && md.contains("| 0 | **2.21e-7** |"),
         "{md}"
     );
     assert!(!md.contains("## GI"), "tasks without runs have no section");
+    let _ = std::fs::remove_dir_all(&runs);
 }
