@@ -182,14 +182,20 @@ fn main() -> ExitCode {
         };
         let world = universe.world();
         if world.rank() == plateau_mpi::ROOT {
-            plateau_mpi::MpiBatch::new(&world)
-                .map_err(|e| e.to_string())
-                .and_then(|remote| {
-                    let remote = remote.wait(args.wait);
-                    let result = run(&args, &remote).map_err(|e| e.to_string());
-                    remote.finish();
-                    result
-                })
+            // A worker's panic re-panics here ("panic" mode). It is caught so that rank 0
+            // still reaches MPI's finalisation, which waits for the workers: were rank 0 to
+            // die of the panic, mpirun could kill them before they report what they served.
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                plateau_mpi::MpiBatch::new(&world)
+                    .map_err(|e| e.to_string())
+                    .and_then(|remote| {
+                        let remote = remote.wait(args.wait);
+                        let result = run(&args, &remote).map_err(|e| e.to_string());
+                        remote.finish();
+                        result
+                    })
+            }))
+            .unwrap_or_else(|_| Err("rank 0 panicked (message above)".into()))
         } else {
             plateau_mpi::serve_with(&world, &f, args.wait)
                 .map(|served| eprintln!("rank {}: {served:?}", world.rank()))
