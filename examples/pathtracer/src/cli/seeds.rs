@@ -88,45 +88,31 @@ fn page(dirs: &[PathBuf]) -> String {
                 row
             })
             .collect();
-        let ran = |c: &[Option<run::Summary>]| -> Vec<f64> {
-            c.iter().flatten().map(|s| s.param_mse).collect()
-        };
+        let ran = |c: &[Option<run::Summary>]| finals(c, |s| s.param_mse);
         let footer = |name: &str, cell: &dyn Fn(&[Option<run::Summary>]) -> String| {
             let mut row = vec![name.to_string()];
             row.extend(columns.iter().map(|c| cell(c)));
             row
         };
         if let Some(p) = paper {
-            rows.push(footer("at or below the paper", &|c| {
-                let v = ran(c);
-                format!("{} of {}", v.iter().filter(|&&m| m <= p).count(), v.len())
-            }));
+            rows.push(footer("at or below the paper", &|c| count_cell(&ran(c), p)));
         }
         rows.push(footer("median [min, max]", &|c| spread_cell(&ran(c))));
         // Some tasks are judged by the image (SORT: cubes of one colour are interchangeable,
         // so the parameter MSE against one assignment says little), so the image MSE is
         // summarised too.
-        let images = |c: &[Option<run::Summary>]| -> Vec<f64> {
-            c.iter().flatten().map(|s| s.image_mse).collect()
-        };
+        let images = |c: &[Option<run::Summary>]| finals(c, |s| s.image_mse);
         if let Some(p) = task.paper().map(|p| p.image_mse) {
             rows.push(footer(
                 &format!("image MSE at or below the paper's ({})", report::sci(p)),
-                &|c| {
-                    let v = images(c);
-                    format!("{} of {}", v.iter().filter(|&&m| m <= p).count(), v.len())
-                },
+                &|c| count_cell(&images(c), p),
             ));
         }
         rows.push(footer("image MSE median [min, max]", &|c| {
             spread_cell(&images(c))
         }));
         rows.push(footer("s/iteration (median)", &|c| {
-            let v: Vec<f64> = c
-                .iter()
-                .flatten()
-                .map(|s| s.seconds_per_iteration)
-                .collect();
+            let v = finals(c, |s| s.seconds_per_iteration);
             if v.is_empty() {
                 return "-".into();
             }
@@ -142,6 +128,20 @@ fn page(dirs: &[PathBuf]) -> String {
     }
     md.push_str("\nSeconds per iteration are wall-clock on a shared 2-core machine: an iteration of the adaptive search and of the polish is a generation (several renders), of the paper's loop one estimate (N renders); compare them only within a column.\n");
     md
+}
+
+/// One number of every run found in a column.
+fn finals(column: &[Option<run::Summary>], get: fn(&run::Summary) -> f64) -> Vec<f64> {
+    column.iter().flatten().map(get).collect()
+}
+
+/// How many of `v` are at or below `limit`, as "k of n".
+fn count_cell(v: &[f64], limit: f64) -> String {
+    format!(
+        "{} of {}",
+        v.iter().filter(|&&m| m <= limit).count(),
+        v.len()
+    )
 }
 
 /// The median and range of `v` as one cell, `-` when empty.
