@@ -65,6 +65,24 @@ def test_one_key_is_the_estimators_first_estimate_with_its_seed_bit_for_bit(opti
         assert np.array_equal(np.asarray(jax.jit(jax.grad(g))(theta, key)), expected)
 
 
+@pytest.mark.parametrize("dim, sigma", [(1, 1e-9), (1, 1e9), (1000, 0.4), (7, 1e-300)])
+def test_extreme_spreads_and_dimensions_are_the_estimators(dim, sigma):
+    theta = jnp.linspace(-3.0, 3.0, dim)
+    g = plateau_free.jax.wrap(floor_sum, sigma=sigma, samples=4)
+    key = jax.random.key(dim)
+    expected = plateau_free.PlateauFreeGradient(floor_sum, seed=plateau_free.jax.seed_of(key), samples=4).estimate(
+        np.asarray(theta), sigma
+    )
+    assert np.array_equal(np.asarray(jax.jit(jax.grad(g))(theta, key)), expected)
+
+
+def test_a_nan_in_the_backward_pass_is_the_estimators_value_error():
+    g = plateau_free.jax.wrap(lambda x: float("nan") if x[0] > 0 else 0.0, sigma=1.0, samples=64)
+    assert float(g(jnp.array([-1.0]), jax.random.key(0))) == 0.0
+    with pytest.raises(Exception, match="NaN"):
+        jax.block_until_ready(jax.grad(g)(jnp.array([-1.0]), jax.random.key(0)))
+
+
 def test_the_seed_is_the_keys_two_random_words():
     key = jax.random.key(3)
     bits = np.asarray(jax.random.bits(key, (2,), jnp.uint32))

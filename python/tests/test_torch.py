@@ -50,6 +50,23 @@ def test_one_seed_is_the_estimators_first_estimate_bit_for_bit(options):
     assert np.array_equal(gradient(g, theta, torch.tensor(12345)), gradient(g, theta, 12345))
 
 
+@pytest.mark.parametrize("dim, sigma", [(1, 1e-9), (1, 1e9), (1000, 0.4), (7, 1e-300)])
+def test_extreme_spreads_and_dimensions_are_the_estimators(dim, sigma):
+    theta = np.linspace(-3.0, 3.0, dim)
+    g = plateau_free.torch.wrap(floor_sum, sigma=sigma, samples=4)
+    expected = plateau_free.PlateauFreeGradient(floor_sum, seed=dim, samples=4).estimate(theta, sigma)
+    assert np.array_equal(gradient(g, theta, dim), expected)
+
+
+def test_a_nan_in_the_backward_pass_is_the_estimators_value_error():
+    g = plateau_free.torch.wrap(lambda x: float("nan") if x[0] > 0 else 0.0, sigma=1.0, samples=64)
+    theta = torch.tensor([-1.0], dtype=torch.float64, requires_grad=True)
+    value = g(theta, 0)
+    assert value.item() == 0.0
+    with pytest.raises(ValueError, match="NaN"):
+        value.backward()
+
+
 def test_the_value_is_f_of_theta_in_thetas_dtype_and_the_seeds_differ():
     g = plateau_free.torch.wrap(floor_sum, sigma=0.4)
     theta = torch.tensor([0.3, -1.2, 2.5], dtype=torch.float32, requires_grad=True)
