@@ -90,6 +90,8 @@ def test_the_seed_is_the_keys_two_random_words():
     # The raw uint32 keys of jax.random.PRNGKey give their own seeds too.
     raw = jax.random.PRNGKey(3)
     assert plateau_free.jax.seed_of(raw) == plateau_free.jax.seed_of(jax.random.wrap_key_data(raw))
+    g, theta = plateau_free.jax.wrap(floor_sum, sigma=0.4), jnp.array([0.3, -1.2, 2.5])
+    assert np.array_equal(np.asarray(jax.grad(g)(theta, raw)), np.asarray(jax.grad(g)(theta, jax.random.wrap_key_data(raw))))
 
 
 def test_one_key_repeats_its_estimate_and_two_keys_differ():
