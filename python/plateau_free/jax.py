@@ -117,6 +117,7 @@ def wrap(
         if not jnp.issubdtype(theta.dtype, jnp.floating):
             raise OptionTypeError(f"theta must be a floating array, not {theta.dtype}")
         smoothing.check_theta(tuple(theta.shape))
+        _check_key(jax, key)
         return g(theta, key)
 
     return checked_g
@@ -132,6 +133,19 @@ def seed_of(key: Any) -> int:
 def _seed_from_bits(bits: Any) -> int:
     high, low = (int(b) for b in np.asarray(bits, dtype=np.uint64).reshape(2))
     return (high << 32) | low
+
+
+def _check_key(jax: Any, key: Any) -> None:
+    """An OptionTypeError unless ``key`` is one PRNG key: typed (``jax.random.key``) or raw
+    (``jax.random.PRNGKey``, two uint32 words); checked before the backward pass needs it."""
+    dtype, shape = getattr(key, "dtype", None), tuple(getattr(key, "shape", (None,)))
+    typed = dtype is not None and jax.dtypes.issubdtype(dtype, jax.dtypes.prng_key) and shape == ()
+    raw = dtype == np.uint32 and shape == (2,)
+    if not (typed or raw):
+        given = _show(key) if dtype is None else f"an array of shape {shape} and dtype {dtype}"
+        raise OptionTypeError(
+            f"key = {given} must be one JAX PRNG key: jax.random.key(seed) or jax.random.PRNGKey(seed)"
+        )
 
 
 def _checked_shape(shape: Any) -> Tuple[int, ...]:

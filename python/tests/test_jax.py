@@ -243,6 +243,9 @@ def test_bad_calls_are_value_errors():
     g = plateau_free.jax.wrap(floor_sum, sigma=[0.1, 0.2])
     with pytest.raises(ValueError, match="sigma has 2 spreads but theta has 3"):
         g(jnp.zeros(3), jax.random.key(0))
+    for key in [0, jnp.arange(2), keys(2), jnp.zeros(3, dtype=jnp.uint32)]:
+        with pytest.raises(ValueError, match="key = .* must be one JAX PRNG key"):
+            plateau_free.jax.wrap(floor_sum, sigma=0.1)(jnp.zeros(3), key)
     with pytest.raises(ValueError, match="theta must be a floating array"):
         plateau_free.jax.wrap(floor_sum, sigma=0.1)(jnp.zeros(3, dtype=jnp.int32), jax.random.key(0))
     # f's value of another shape than declared: the callback's ValueError, inside JAX's error.
