@@ -89,3 +89,35 @@ def interrupted_within(seconds=5.0, after=0.3):
     finally:
         timer.cancel()
     assert time.perf_counter() - start < seconds
+
+
+def smoothed_step_gradient(theta, a, sigma):
+    """d/dtheta E 1[theta + tau > a], tau ~ N(0, sigma^2): phi((theta - a) / sigma) / sigma."""
+    return phi((theta - a) / sigma) / sigma
+
+
+def smoothed_floor_gradient(theta, sigma):
+    """d/dtheta E floor(theta + tau), tau ~ N(0, sigma^2): floor jumps by 1 at every integer k,
+    so the sum of phi((theta - k) / sigma) / sigma over the integers (those within 40 sigma)."""
+    reach = int(math.ceil(40 * sigma)) + 1
+    centre = int(math.floor(theta))
+    return sum(smoothed_step_gradient(theta, k, sigma) for k in range(centre - reach, centre + reach + 1))
+
+
+def floor_sum(x):
+    """The staircase sum(floor(x)): flat between integers, a jump of 1 at each."""
+    return float(np.sum(np.floor(x)))
+
+
+def assert_mean_matches(samples, expected, what, sigmas=4.0):
+    """The mean of ``samples`` (one row per key or seed) is ``expected`` within ``sigmas``
+    standard errors of that mean, computed from the samples; the standard error must be small
+    enough (a tenth of the largest |expected|, or 1e-3) for the test to mean something."""
+    samples = np.asarray(samples, dtype=float)
+    mean = samples.mean(axis=0)
+    se = samples.std(axis=0, ddof=1) / math.sqrt(len(samples))
+    expected = np.asarray(expected, dtype=float)
+    assert np.all(se < max(0.1 * np.max(np.abs(expected)), 1e-3)), f"{what}: standard error {se} too large"
+    assert np.all(np.abs(mean - expected) <= sigmas * se + 1e-12), (
+        f"{what}: mean {mean} vs analytic {expected}, standard error {se} ({len(samples)} samples)"
+    )

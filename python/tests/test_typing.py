@@ -1,6 +1,6 @@
 """The package's types hold together: its modules (``__init__.py``, ``_minimize.py``, ...,
-``ray.py``) are typed inline, the extension by ``_native.pyi``, and mypy in strict mode checks
-the one against the other."""
+``ray.py``, the adapters ``jax.py``, ``torch.py``, ``scipy.py``) are typed inline, the extension
+by ``_native.pyi``, and mypy in strict mode checks the one against the other."""
 
 import os
 import subprocess
