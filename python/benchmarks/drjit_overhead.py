@@ -11,6 +11,7 @@ backward pass; a real render (tens of milliseconds and more) dwarfs it.
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 from pathlib import Path
@@ -57,7 +58,8 @@ def main() -> None:
         direct_best = min(direct_best, (time.perf_counter() - start) / passes)
     print(f"PlateauFreeOp backward pass: {op_best * 1e6:.0f} us; estimator directly: "
           f"{direct_best * 1e6:.0f} us; the op adds {(op_best - direct_best) * 1e6:.0f} us per pass "
-          f"(64x48 RGB, 2 samples, best of {rounds} x {passes})")
+          f"(64x48 RGB, 2 samples, best of {rounds} x {passes}; load average "
+          f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)")
 
 
 if __name__ == "__main__":
