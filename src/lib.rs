@@ -51,6 +51,8 @@
 //!   [`Ask`] gives an iteration's points and one seed per point; `tell` takes their values
 //!   and takes the step. The callback forms are written on them: the same options and seed
 //!   give the same bits ([`NoObjective`] stands in for the objective a run does not need).
+//! - `argmin` (feature `argmin`): the estimate as [argmin](https://argmin-rs.org)'s
+//!   `Gradient`, so that its steepest descent and L-BFGS run on plateau-ridden functions.
 //! - [`baseline`]: finite differences and SPSA, for comparison on the same loop.
 //! - [`kernel`]: the Gaussian kernel, the inverse CDF of its derivative, `c_n`.
 //! - [`seeding`]: how every random stream is seeded (SplitMix64 of the seed, the estimate's
@@ -107,6 +109,8 @@ mod builder;
 mod adam;
 mod adaptive;
 mod anneal;
+#[cfg(feature = "argmin")]
+pub mod argmin;
 mod ask_tell;
 pub mod baseline;
 mod check;

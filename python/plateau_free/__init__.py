@@ -25,6 +25,11 @@ The main entry points:
 - :class:`OptionTypeError` -- an option of the wrong type: a ValueError (as every bad option)
   and a TypeError.
 
+Submodules imported on demand, each with its extra: ``plateau_free.ray`` (``[ray]``),
+``plateau_free.nevergrad`` (``[nevergrad]``: registers ``PlateauFree`` in nevergrad's
+optimizers), ``plateau_free.drjit`` (``[mitsuba]``: ``PlateauFreeOp``, our gradient inside
+Dr.Jit's, for Mitsuba 3). See ``docs/integrations.md``.
+
 The estimators, :class:`Adam` and :class:`AskTell` may be shared by threads: their calls are
 serialised, one at a time per object, in the order the threads get its lock.
 """

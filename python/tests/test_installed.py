@@ -42,5 +42,5 @@ def test_the_wheel_is_abi3_and_declares_its_licenses_and_extras():
     meta = dist.metadata
     assert meta["License-Expression"] == "MIT OR Apache-2.0"
     assert sorted(meta.get_all("License-File") or []) == ["LICENSE-APACHE", "LICENSE-MIT"]
-    assert {"ray", "mitsuba", "jax", "torch", "scipy", "test"} <= set(meta.get_all("Provides-Extra") or [])
+    assert {"ray", "mitsuba", "jax", "torch", "scipy", "nevergrad", "test"} <= set(meta.get_all("Provides-Extra") or [])
     assert any(req.startswith("numpy") for req in dist.requires or [])

@@ -1,5 +1,5 @@
 """The examples of docs/integrations.md run: the one Python block of each adapter's section
-(JAX, PyTorch, scipy), executed as written, each ending in its own assertion."""
+(JAX, PyTorch, scipy, nevergrad, Dr.Jit / Mitsuba), executed as written, each ending in its own assertion."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ def section_examples(heading):
     return re.findall(r"^```python\n(.*?)^```", section, flags=re.MULTILINE | re.DOTALL)
 
 
-@pytest.mark.parametrize("heading", ["JAX", "PyTorch", "scipy"])
+@pytest.mark.parametrize("heading", ["JAX", "PyTorch", "scipy", "nevergrad", "Dr.Jit / Mitsuba"])
 def test_the_sections_example_runs(heading):
     (example,) = section_examples(heading)
     exec(compile(example, f"{PAGE} ({heading})", "exec"), {"__name__": "__example__"})

@@ -236,6 +236,18 @@ impl<F> PlateauFreeGradient<F> {
     pub fn estimates_made(&self) -> u64 {
         self.core.estimates
     }
+
+    /// The configured seed, for adapters that draw streams of their own from it.
+    #[cfg(feature = "argmin")]
+    pub(crate) fn seed_setting(&self) -> u64 {
+        self.core.settings.seed
+    }
+
+    /// The box set by [`PlateauFreeGradient::bounds`], if any (not yet checked).
+    #[cfg(feature = "argmin")]
+    pub(crate) fn box_bounds(&self) -> Option<&super::Bounds> {
+        self.core.bounds()
+    }
 }
 
 impl<F: Objective> PlateauFreeGradient<F> {
