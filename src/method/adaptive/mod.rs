@@ -1,19 +1,23 @@
-//! The adaptive search of [`super::AskTell`] between asks.
+//! The adaptive search, written once, as a state machine between asks: runs of a Gaussian
+//! search distribution (`gaussian.rs`: its draws and its update) from the start or the best
+//! point seen, each restart with twice the population, until the budget is spent, the
+//! target reached, or (without restarts) a run converges. [`crate::Strategy::Adaptive`] of
+//! [`crate::AskTell`], and the polish after the paper's loop (`../polished.rs`).
+
+mod gaussian;
 
 use nalgebra::DVector;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use super::{count, non_finite, AskTell, Best};
-use crate::adaptive::{rng, Params, SearchGaussian};
 use crate::error::Error;
-use crate::minimize::{Metric, Minimum, Options, Stop, FULL_METRIC_MAX_DIM};
 use crate::objective::Points;
-
-/// Mixed into the seed for the polish's random stream, so that it is not the loop's.
-const POLISH_STREAM: u64 = 0x706f_6c69_7368_0001;
+use crate::run::{
+    count, non_finite, Ask, Best, Metric, Minimum, Options, Stop, FULL_METRIC_MAX_DIM,
+};
+use gaussian::{rng, Params, SearchGaussian};
 
 /// The adaptive search between asks: `Minimizer`'s loop over runs and generations, unrolled.
-pub(super) struct Adaptive {
+pub(crate) struct Adaptive {
     rng: Xoshiro256PlusPlus,
     sigma0: f64,
     scales: Vec<f64>,
@@ -27,12 +31,12 @@ pub(super) struct Adaptive {
     /// The asked generation's offsets (repaired onto the bounds), while its values are
     /// awaited.
     asked: Option<Vec<DVector<f64>>>,
-    pub(super) points: Vec<f64>,
-    pub(super) seeds: Vec<u64>,
+    points: Vec<f64>,
+    seeds: Vec<u64>,
 }
 
 impl Adaptive {
-    pub(super) fn new(o: &Options, x0: &[f64]) -> Adaptive {
+    pub(crate) fn new(o: &Options, x0: &[f64]) -> Adaptive {
         let n = x0.len();
         // The start spread and the covariance's starting scales: from the box, else from x0.
         let (sigma0, scales) = match (&o.bounds, o.sigma0) {
@@ -73,31 +77,26 @@ impl Adaptive {
         }
     }
 
-    /// The polish after the paper's loop: a search from the loop's best point `x` whose
-    /// spread starts at the loop's last one, with its own random stream, counting iterations
-    /// on from the loop's.
-    pub(super) fn polishing(o: &Options, x: &[f64], loop_end: &Minimum) -> Adaptive {
-        let mut start = o.clone();
-        start.sigma0 = Some(loop_end.sigma);
-        start.seed = o.seed ^ POLISH_STREAM;
-        let mut adaptive = Adaptive::new(&start, x);
-        adaptive.iterations = loop_end.iterations;
-        adaptive
+    /// The same search counting its iterations on from `iterations` (the polish continues
+    /// the paper's loop's count).
+    pub(crate) fn counting_from(mut self, iterations: usize) -> Adaptive {
+        self.iterations = iterations;
+        self
     }
 
     /// The spread of the first generation.
-    pub(super) fn start_sigma(&self) -> f64 {
+    pub(crate) fn start_sigma(&self) -> f64 {
         self.sigma0
     }
 
-    /// Draws the next generation into `points` and `seeds`.
-    pub(super) fn ask(
+    /// Draws the next generation: its points and their seeds.
+    pub(crate) fn ask(
         &mut self,
         o: &Options,
         budget: usize,
         evaluations: usize,
-        n: usize,
-    ) -> Result<(), Error> {
+    ) -> Result<Ask<'_>, Error> {
+        let n = self.start.len();
         if self.asked.is_some() {
             return Err(Error::AskPending);
         }
@@ -144,21 +143,21 @@ impl Adaptive {
         self.seeds.clear();
         self.seeds.resize(count, seed);
         self.asked = Some(ys);
-        Ok(())
+        Ok(Ask::new(Points::new(&self.points, n), &self.seeds))
     }
 
     /// Takes the asked generation's values: the best point, the budget, the target, the
     /// distribution's update and, when a run ends, the restart. Returns the result once the
     /// whole run has ended.
-    pub(super) fn tell(
+    pub(crate) fn tell(
         &mut self,
         o: &Options,
         budget: usize,
         evaluations: &mut usize,
         best: &mut Best,
         values: &[f64],
-        n: usize,
     ) -> Result<Option<Minimum>, Error> {
+        let n = self.start.len();
         let (Some(ys), Some(dist)) = (&self.asked, &mut self.dist) else {
             return Err(Error::NothingAsked);
         };
@@ -170,14 +169,7 @@ impl Adaptive {
         *evaluations += count;
         self.iterations += 1;
         let end = |stop, sigma| {
-            Some(AskTell::minimum(
-                best,
-                *evaluations,
-                self.iterations,
-                self.restarts,
-                sigma,
-                stop,
-            ))
+            Some(best.minimum(*evaluations, self.iterations, self.restarts, sigma, stop))
         };
         if o.target.is_some_and(|t| best.fun <= t) {
             return Ok(end(Stop::Target, dist.sigma));
