@@ -27,7 +27,7 @@ pub struct Step<'a> {
 impl Optimizer {
     /// Runs from `start` to the end.
     ///
-    /// With bounds on Adam ([`Adam::bounds`]), `start` must lie inside the box, the
+    /// With bounds on Adam ([`crate::Adam::bounds`]), `start` must lie inside the box, the
     /// estimator is handed the box ([`GradientEstimator::set_bounds`]) so that `f` is only
     /// evaluated inside it, and every step is projected onto it.
     ///
