@@ -10,7 +10,7 @@ use super::adaptive::Adaptive;
 use super::polished::Polished;
 use crate::error::Error;
 use crate::objective::Points;
-use crate::run::{count, non_finite, Ask, Best, Minimum, Options, Stop, Strategy};
+use crate::run::{Ask, Best, Ledger, Minimum, Options, Stop, Strategy};
 // For the documentation's links only.
 #[cfg(doc)]
 use crate::{Minimizer, PaperAskTell};
@@ -37,11 +37,9 @@ use crate::{Minimizer, PaperAskTell};
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
 pub struct AskTell {
-    options: Options,
-    budget: usize,
+    /// The options, the budget, the evaluations told and the best point seen.
+    ledger: Ledger,
     n: usize,
-    best: Best,
-    evaluations: usize,
     /// The start, evaluated first and alone (so that the result is never worse than it),
     /// and its seed (the run's).
     x0: Vec<f64>,
@@ -56,10 +54,10 @@ pub struct AskTell {
 impl fmt::Debug for AskTell {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("AskTell")
-            .field("strategy", &self.options.strategy)
-            .field("budget", &self.budget)
-            .field("evaluations", &self.evaluations)
-            .field("best", &self.best.fun)
+            .field("strategy", &self.ledger.options.strategy)
+            .field("budget", &self.ledger.budget)
+            .field("evaluations", &self.ledger.evaluations)
+            .field("best", &self.ledger.best.fun)
             .field("result", &self.result)
             .finish_non_exhaustive()
     }
@@ -89,44 +87,25 @@ impl Method {
         }
     }
 
-    fn ask(
-        &mut self,
-        o: &Options,
-        budget: usize,
-        evaluations: usize,
-    ) -> Result<Option<Ask<'_>>, Error> {
+    fn ask(&mut self, ledger: &Ledger) -> Result<Option<Ask<'_>>, Error> {
         match self {
-            Method::Adaptive(a) => a.ask(o, budget, evaluations).map(Some),
-            Method::Polished(p) => p.ask(o, budget, evaluations),
+            Method::Adaptive(a) => a.ask(ledger).map(Some),
+            Method::Polished(p) => p.ask(ledger),
         }
     }
 
     /// Takes the values of the method's asked points; the result once the run has ended.
-    fn tell(
-        &mut self,
-        o: &Options,
-        budget: usize,
-        evaluations: &mut usize,
-        best: &mut Best,
-        values: &[f64],
-    ) -> Result<Option<Minimum>, Error> {
+    fn tell(&mut self, ledger: &mut Ledger, values: &[f64]) -> Result<Option<Minimum>, Error> {
         match self {
-            Method::Adaptive(a) => a.tell(o, budget, evaluations, best, values),
-            Method::Polished(p) => p.tell(o, budget, evaluations, best, values),
+            Method::Adaptive(a) => a.tell(ledger, values),
+            Method::Polished(p) => p.tell(ledger, values),
         }
     }
 
     /// The run's result, unless the method goes on from `end` (the polish after the loop).
-    fn hand_over(
-        &mut self,
-        o: &Options,
-        budget: usize,
-        evaluations: usize,
-        best: &Best,
-        end: Option<Minimum>,
-    ) -> Option<Minimum> {
+    fn hand_over(&mut self, ledger: &Ledger, end: Option<Minimum>) -> Option<Minimum> {
         match (self, end) {
-            (Method::Polished(p), Some(end)) => p.hand_over(o, budget, evaluations, best, end),
+            (Method::Polished(p), Some(end)) => p.hand_over(ledger, end),
             (_, end) => end,
         }
     }
@@ -157,17 +136,19 @@ impl AskTell {
             )?)),
         };
         Ok(AskTell {
-            budget,
             n: x0.len(),
-            best: Best::new(x0),
-            evaluations: 0,
             x0: x0.to_vec(),
             x0_seed: [options.seed],
             start: Start::ToAsk,
             method,
             result: None,
             failed: None,
-            options,
+            ledger: Ledger {
+                options,
+                budget,
+                evaluations: 0,
+                best: Best::new(x0),
+            },
         })
     }
 
@@ -203,10 +184,7 @@ impl AskTell {
             Start::Told => {}
         }
         let ends_run = self.method.failed_ask_ends_run();
-        match self
-            .method
-            .ask(&self.options, self.budget, self.evaluations)
-        {
+        match self.method.ask(&self.ledger) {
             Ok(ask) => Ok(ask),
             Err(error) => {
                 if ends_run && !matches!(error, Error::AskPending) {
@@ -233,21 +211,9 @@ impl AskTell {
         let end = match self.start {
             Start::ToAsk => return Err(Error::NothingAsked),
             Start::Asked => self.tell_start(values)?,
-            Start::Told => self.method.tell(
-                &self.options,
-                self.budget,
-                &mut self.evaluations,
-                &mut self.best,
-                values,
-            )?,
+            Start::Told => self.method.tell(&mut self.ledger, values)?,
         };
-        self.result = self.method.hand_over(
-            &self.options,
-            self.budget,
-            self.evaluations,
-            &self.best,
-            end,
-        );
+        self.result = self.method.hand_over(&self.ledger, end);
         Ok(())
     }
 
@@ -255,22 +221,18 @@ impl AskTell {
     /// is reached, when the budget is spent, or when the paper's loop has no iteration to
     /// make (then the polish, if any, follows).
     fn tell_start(&mut self, values: &[f64]) -> Result<Option<Minimum>, Error> {
-        let points = Points::new(&self.x0, self.n);
-        count(1, values.len())?;
-        non_finite(values, points, 0)?;
-        self.best.see(points, values);
-        self.evaluations = 1;
+        self.ledger.take(Points::new(&self.x0, self.n), values)?;
         self.start = Start::Told;
         let no_loop = matches!(&self.method, Method::Polished(p) if !p.has_iterations());
-        let stop = if self.options.target.is_some_and(|t| self.best.fun <= t) {
+        let stop = if self.ledger.target_reached() {
             Stop::Target
-        } else if self.evaluations >= self.budget || no_loop {
+        } else if self.ledger.evaluations >= self.ledger.budget || no_loop {
             Stop::Budget
         } else {
             return Ok(None);
         };
         let sigma = self.method.start_sigma();
-        Ok(Some(self.best.minimum(1, 0, 0, sigma, stop)))
+        Ok(Some(self.ledger.minimum(0, 0, sigma, stop)))
     }
 
     /// Whether the run has ended (the next ask gives `None`; [`AskTell::result`] is set).
@@ -293,24 +255,25 @@ impl AskTell {
             return Err(error);
         }
         self.result.ok_or(Error::Unfinished {
-            evaluations: self.evaluations,
-            budget: self.budget,
+            evaluations: self.ledger.evaluations,
+            budget: self.ledger.budget,
         })
     }
 
     /// The best point told so far and its value; `None` before the first value.
     pub fn best(&self) -> Option<(&[f64], f64)> {
-        (self.best.fun < f64::INFINITY).then_some((self.best.x.as_slice(), self.best.fun))
+        let best = &self.ledger.best;
+        (best.fun < f64::INFINITY).then_some((best.x.as_slice(), best.fun))
     }
 
     /// Evaluations told so far.
     pub fn evaluations(&self) -> usize {
-        self.evaluations
+        self.ledger.evaluations
     }
 
     /// The budget of evaluations.
     pub fn budget(&self) -> usize {
-        self.budget
+        self.ledger.budget
     }
 
     /// The dimension of the points.

@@ -10,7 +10,7 @@ use crate::anneal::Annealer;
 use crate::error::Error;
 use crate::estimator::PlateauFreeGradient;
 use crate::objective::Points;
-use crate::run::{count, non_finite, Ask, Best, Minimum, Options, Stop};
+use crate::run::{Ask, Ledger, Minimum, Options, Stop};
 // For the documentation's links only.
 #[cfg(doc)]
 use crate::{Minimizer, Strategy};
@@ -94,14 +94,9 @@ impl Polished {
     }
 
     /// The loop's next estimate's points, else the final point, else the polish's.
-    pub(crate) fn ask(
-        &mut self,
-        o: &Options,
-        budget: usize,
-        evaluations: usize,
-    ) -> Result<Option<Ask<'_>>, Error> {
+    pub(crate) fn ask(&mut self, ledger: &Ledger) -> Result<Option<Ask<'_>>, Error> {
         if let Some(polish) = &mut self.polish {
-            return polish.ask(o, budget, evaluations).map(Some);
+            return polish.ask(ledger).map(Some);
         }
         if self.run.as_ref().is_some_and(|run| !run.is_done()) {
             return match &mut self.run {
@@ -127,62 +122,47 @@ impl Polished {
     /// point's value, the run's end in the polish.
     pub(crate) fn tell(
         &mut self,
-        o: &Options,
-        budget: usize,
-        evaluations: &mut usize,
-        best: &mut Best,
+        ledger: &mut Ledger,
         values: &[f64],
     ) -> Result<Option<Minimum>, Error> {
         if let Some(polish) = &mut self.polish {
-            return polish.tell(o, budget, evaluations, best, values);
+            return polish.tell(ledger, values);
         }
         let n = self.last_point.len();
         if self.final_asked {
-            let points = Points::new(&self.last_point, n);
-            count(1, values.len())?;
-            non_finite(values, points, *evaluations)?;
-            best.see(points, values);
-            *evaluations += 1;
-            let stop = if o.target.is_some_and(|t| best.fun <= t) {
+            ledger.take(Points::new(&self.last_point, n), values)?;
+            let stop = if ledger.target_reached() {
                 Stop::Target
             } else {
                 Stop::Budget
             };
-            let end = best.minimum(*evaluations, self.iterations, 0, self.sigma, stop);
-            return Ok(Some(end));
+            return Ok(Some(ledger.minimum(self.iterations, 0, self.sigma, stop)));
         }
         let Some(run) = &mut self.run else {
             return Err(Error::NothingAsked);
         };
         run.tell(values)?;
         // The told points are still in the estimator's buffers.
-        best.see(run.core.points(n), values);
-        *evaluations += values.len();
+        ledger.count(run.core.points(n), values);
         Ok(None)
     }
 
     /// The run's result at the loop's `end`, or `None` when the polish takes over: a search
     /// from the loop's best point whose spread starts at the loop's last one, with its own
     /// random stream, counting iterations on from the loop's.
-    pub(crate) fn hand_over(
-        &mut self,
-        o: &Options,
-        budget: usize,
-        evaluations: usize,
-        best: &Best,
-        end: Minimum,
-    ) -> Option<Minimum> {
+    pub(crate) fn hand_over(&mut self, ledger: &Ledger, end: Minimum) -> Option<Minimum> {
+        let o = &ledger.options;
         let polishes = self.polish.is_none()
             && o.polish > 0.0
             && end.stop == Stop::Budget
-            && evaluations < budget;
+            && ledger.evaluations < ledger.budget;
         if !polishes {
             return Some(end);
         }
         let mut start = o.clone();
         start.sigma0 = Some(end.sigma);
         start.seed = o.seed ^ POLISH_STREAM;
-        let polish = Adaptive::new(&start, &best.x).counting_from(end.iterations);
+        let polish = Adaptive::new(&start, &ledger.best.x).counting_from(end.iterations);
         self.polish = Some(Box::new(polish));
         None
     }

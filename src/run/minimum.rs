@@ -1,8 +1,12 @@
-//! What a [`Minimizer`] run gives back: the [`Minimum`] and why the run ended ([`Stop`]),
-//! and the best point seen, which every method keeps the same way ([`Best`]).
+//! What a [`Minimizer`] run gives back: the [`Minimum`] and why the run ended ([`Stop`]);
+//! and the run's account, which every method keeps the same way ([`Ledger`]: the options,
+//! the budget, the evaluations spent, the best point seen).
 
 use std::fmt;
 
+use super::ask::{count, non_finite};
+use super::options::Options;
+use crate::error::Error;
 use crate::objective::Points;
 // For the documentation's links only.
 #[cfg(doc)]
@@ -74,20 +78,57 @@ impl Best {
             }
         }
     }
+}
 
-    /// The minimum of a run whose best point this is.
+/// A [`Minimizer`] run's account, kept the same way by every method: its options and budget,
+/// the evaluations spent and the best point seen.
+#[derive(Debug, Clone)]
+pub(crate) struct Ledger {
+    pub(crate) options: Options,
+    pub(crate) budget: usize,
+    pub(crate) evaluations: usize,
+    pub(crate) best: Best,
+}
+
+impl Ledger {
+    /// Takes the told `values` of the asked `points`: checks their count and that every
+    /// value is finite (the error names the first that is not by its index in the run's
+    /// evaluations), then counts them and keeps the best. On error nothing has changed.
+    pub(crate) fn take(&mut self, points: Points<'_>, values: &[f64]) -> Result<(), Error> {
+        count(points.len(), values.len())?;
+        non_finite(values, points, self.evaluations)?;
+        self.count(points, values);
+        Ok(())
+    }
+
+    /// Counts values already checked and keeps the best.
+    pub(crate) fn count(&mut self, points: Points<'_>, values: &[f64]) {
+        self.best.see(points, values);
+        self.evaluations += values.len();
+    }
+
+    /// Whether the best value has reached [`Minimizer::target`].
+    pub(crate) fn target_reached(&self) -> bool {
+        self.options.target.is_some_and(|t| self.best.fun <= t)
+    }
+
+    /// The evaluations the budget has left.
+    pub(crate) fn left(&self) -> usize {
+        self.budget - self.evaluations
+    }
+
+    /// The run's result, with the best point seen.
     pub(crate) fn minimum(
         &self,
-        evaluations: usize,
         iterations: usize,
         restarts: usize,
         sigma: f64,
         stop: Stop,
     ) -> Minimum {
         Minimum {
-            x: self.x.clone(),
-            fun: self.fun,
-            evaluations,
+            x: self.best.x.clone(),
+            fun: self.best.fun,
+            evaluations: self.evaluations,
             iterations,
             restarts,
             sigma,

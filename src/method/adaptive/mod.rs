@@ -11,9 +11,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 
 use crate::error::Error;
 use crate::objective::Points;
-use crate::run::{
-    count, non_finite, Ask, Best, Metric, Minimum, Options, Stop, FULL_METRIC_MAX_DIM,
-};
+use crate::run::{Ask, Ledger, Metric, Minimum, Options, Stop, FULL_METRIC_MAX_DIM};
 use gaussian::{rng, Params, SearchGaussian};
 
 /// The adaptive search between asks: `Minimizer`'s loop over runs and generations, unrolled.
@@ -90,13 +88,8 @@ impl Adaptive {
     }
 
     /// Draws the next generation: its points and their seeds.
-    pub(crate) fn ask(
-        &mut self,
-        o: &Options,
-        budget: usize,
-        evaluations: usize,
-    ) -> Result<Ask<'_>, Error> {
-        let n = self.start.len();
+    pub(crate) fn ask(&mut self, ledger: &Ledger) -> Result<Ask<'_>, Error> {
+        let (n, o) = (self.start.len(), &ledger.options);
         if self.asked.is_some() {
             return Err(Error::AskPending);
         }
@@ -113,7 +106,7 @@ impl Adaptive {
             dist
         });
         let mut ys = dist.sample(&mut self.rng).ys;
-        let count = ys.len().min(budget - evaluations);
+        let count = ys.len().min(ledger.left());
         ys.truncate(count);
         self.points.clear();
         for y in ys.iter_mut() {
@@ -134,7 +127,7 @@ impl Adaptive {
         }
         if let Some(index) = self.points.iter().position(|v| !v.is_finite()) {
             return Err(Error::NonFinitePoint {
-                sample: evaluations + index / n,
+                sample: ledger.evaluations + index / n,
                 index: index % n,
                 value: self.points[index],
             });
@@ -151,44 +144,33 @@ impl Adaptive {
     /// whole run has ended.
     pub(crate) fn tell(
         &mut self,
-        o: &Options,
-        budget: usize,
-        evaluations: &mut usize,
-        best: &mut Best,
+        ledger: &mut Ledger,
         values: &[f64],
     ) -> Result<Option<Minimum>, Error> {
-        let n = self.start.len();
         let (Some(ys), Some(dist)) = (&self.asked, &mut self.dist) else {
             return Err(Error::NothingAsked);
         };
-        let points = Points::new(&self.points, n);
-        count(ys.len(), values.len())?;
-        non_finite(values, points, *evaluations)?;
-        best.see(points, values);
-        let count = values.len();
-        *evaluations += count;
+        ledger.take(Points::new(&self.points, self.start.len()), values)?;
         self.iterations += 1;
-        let end = |stop, sigma| {
-            Some(best.minimum(*evaluations, self.iterations, self.restarts, sigma, stop))
-        };
-        if o.target.is_some_and(|t| best.fun <= t) {
+        let end = |stop, sigma| Some(ledger.minimum(self.iterations, self.restarts, sigma, stop));
+        if ledger.target_reached() {
             return Ok(end(Stop::Target, dist.sigma));
         }
-        if *evaluations >= budget || count < dist.p.lambda {
+        if ledger.evaluations >= ledger.budget || values.len() < dist.p.lambda {
             return Ok(end(Stop::Budget, dist.sigma));
         }
         let ended = dist.update(ys, values).is_some();
         let sigma = dist.sigma;
         self.asked = None;
         if ended {
+            let o = &ledger.options;
             if !o.restarts {
-                let result = end(Stop::Converged, sigma);
-                return Ok(result);
+                return Ok(end(Stop::Converged, sigma));
             }
             self.restarts += 1;
             self.lambda *= 2;
             if o.restart_from_best {
-                self.start.clone_from(&best.x);
+                self.start.clone_from(&ledger.best.x);
             }
             self.dist = None;
         }
