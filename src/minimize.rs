@@ -1,12 +1,18 @@
 //! `minimize(f, x0, budget)`: the entry point for users who bring only a function, a start
-//! and a number of evaluations, and [`Minimizer`], the builder beside it.
+//! and a number of evaluations, and [`Minimizer`], the builder beside it. [`Minimizer::run`]
+//! is the callback form: it drives the ask-and-tell run ([`AskTell`], `method/`) with the
+//! objective. The methods themselves live in `method/`, the options and the result in
+//! `run/`.
 
 use std::fmt;
 
-use crate::ask_tell::{AskTell, NoObjective};
-use crate::check;
 use crate::error::Error;
-use crate::objective::Objective;
+use crate::method::AskTell;
+use crate::objective::{NoObjective, Objective};
+use crate::run::{Metric, Minimum, Options, Strategy};
+// For the documentation's links only.
+#[cfg(doc)]
+use crate::run::Stop;
 
 /// Minimises `f` from `x0` with at most `budget` evaluations of `f`, with no other setting to
 /// choose: the first thing to try.
@@ -30,89 +36,6 @@ use crate::objective::Objective;
 /// ([`Error::NonFiniteValue`], with the point).
 pub fn minimize<F: Fn(&[f64]) -> f64>(f: F, x0: &[f64], budget: usize) -> Result<Minimum, Error> {
     Minimizer::new(f).budget(budget).run(x0)
-}
-
-/// Why a run of [`Minimizer`] ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Stop {
-    /// The budget of evaluations is spent.
-    Budget,
-    /// The best value reached [`Minimizer::target`].
-    Target,
-    /// The search converged (or stalled) and restarts are off ([`Minimizer::restarts`]).
-    Converged,
-}
-
-impl fmt::Display for Stop {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Stop::Budget => "budget spent",
-            Stop::Target => "target reached",
-            Stop::Converged => "converged",
-        })
-    }
-}
-
-/// The search method of a [`Minimizer`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Strategy {
-    /// The default: a Gaussian search distribution with adaptive spread and metric, flat-step
-    /// growth of the spread on plateaus, and restarts from the best point with a doubled
-    /// population. Needs no step size or learning rate.
-    Adaptive,
-    /// The paper's loop: the plateau-free gradient ([`crate::PlateauFreeGradient`], radial
-    /// sampler, antithetic pairs) with `samples` evaluations per estimate, [`crate::Adam`]
-    /// with learning rate `lr`, and [`crate::Annealer::paper`] from `sigma0` over the
-    /// iterations the budget allows (`(budget - 2) / samples`: the first evaluation is at the
-    /// start, the last at the final parameters; a budget too small for an iteration
-    /// evaluates the start alone). With bounds, every perturbed point is clamped onto the
-    /// box and every step projected onto it.
-    Paper {
-        /// `N`, evaluations of `f` per gradient estimate (even).
-        samples: usize,
-        /// Adam's learning rate.
-        lr: f64,
-        /// The starting spread of the annealer.
-        sigma0: f64,
-    },
-}
-
-/// The metric (covariance) the search distribution learns.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Metric {
-    /// Full up to `n = 200`, diagonal above (the default).
-    #[default]
-    Auto,
-    /// A full covariance: learns rotated, ill-conditioned metrics; `O(n^2)` per evaluation
-    /// and `O(n^3)` per eigendecomposition (every few iterations).
-    Full,
-    /// A diagonal covariance: per-coordinate spreads only, `O(n)` per evaluation (separable
-    /// CMA-ES, Ros and Hansen 2008, positive weights only). For large `n`; slow on rotated,
-    /// ill-conditioned functions.
-    Diagonal,
-}
-
-/// The largest dimension for which [`Metric::Auto`] learns a full covariance.
-pub const FULL_METRIC_MAX_DIM: usize = 200;
-
-/// The result of a [`Minimizer`] run.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Minimum {
-    /// The best point seen. The start is evaluated first, so `f(x) <= f(x0)` always.
-    pub x: Vec<f64>,
-    /// `f(x)`.
-    pub fun: f64,
-    /// Evaluations of `f` spent (at most the budget, whatever the method and the budget).
-    pub evaluations: usize,
-    /// Iterations (generations of the search distribution, or gradient steps of the paper's
-    /// loop).
-    pub iterations: usize,
-    /// Restarts of the search distribution (0 for the paper's loop).
-    pub restarts: usize,
-    /// The spread at the end.
-    pub sigma: f64,
-    /// Why the run ended.
-    pub stop: Stop,
 }
 
 /// `minimize` with options.
@@ -157,45 +80,6 @@ pub struct Minimum {
 pub struct Minimizer<F> {
     objective: F,
     options: Options,
-}
-
-/// A [`Minimizer`]'s options: everything but the objective, which is all an ask-and-tell
-/// run needs.
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct Options {
-    pub(crate) budget: Option<usize>,
-    pub(crate) seed: u64,
-    pub(crate) sigma0: Option<f64>,
-    pub(crate) bounds: Option<(Vec<f64>, Vec<f64>)>,
-    pub(crate) target: Option<f64>,
-    pub(crate) population: Option<usize>,
-    pub(crate) restarts: bool,
-    pub(crate) mirrored: bool,
-    pub(crate) flat_growth: bool,
-    pub(crate) metric: Metric,
-    pub(crate) restart_from_best: bool,
-    pub(crate) strategy: Strategy,
-    pub(crate) polish: f64,
-}
-
-impl Default for Options {
-    fn default() -> Self {
-        Options {
-            budget: None,
-            seed: 0,
-            sigma0: None,
-            bounds: None,
-            target: None,
-            population: None,
-            restarts: true,
-            mirrored: true,
-            flat_growth: true,
-            metric: Metric::Auto,
-            restart_from_best: true,
-            strategy: Strategy::Adaptive,
-            polish: 0.0,
-        }
-    }
 }
 
 impl<F> fmt::Debug for Minimizer<F> {
@@ -352,98 +236,5 @@ impl<F: Objective> Minimizer<F> {
             run.tell(&values)?;
         }
         run.finish()
-    }
-}
-
-impl Options {
-    /// Checks the options and the start; returns the budget.
-    pub(crate) fn check(&self, x0: &[f64]) -> Result<usize, Error> {
-        check::theta(x0)?;
-        let n = x0.len();
-        let budget = self.budget.unwrap_or(1000 * n);
-        if budget == 0 {
-            return Err(Error::InvalidParameter {
-                name: "budget",
-                value: 0usize.into(),
-                reason: "must be at least 1 evaluation",
-            });
-        }
-        if let Some(s) = self.sigma0 {
-            check::positive("sigma0", s)?;
-        }
-        if let Some(t) = self.target {
-            if t.is_nan() {
-                return Err(Error::InvalidParameter {
-                    name: "target",
-                    value: t.into(),
-                    reason: "must not be NaN",
-                });
-            }
-        }
-        if let Some(p) = self.population {
-            if p < 2 {
-                return Err(Error::InvalidParameter {
-                    name: "population",
-                    value: p.into(),
-                    reason: "must be at least 2",
-                });
-            }
-            // A generation's points are held at once: a population too large for memory is
-            // an error here rather than a panic or an abort when the first generation is drawn.
-            let fits = p
-                .checked_mul(n)
-                .is_some_and(|len| Vec::<f64>::new().try_reserve_exact(len).is_ok());
-            if !fits {
-                return Err(Error::InvalidParameter {
-                    name: "population",
-                    value: p.into(),
-                    reason: "times the dimension is more memory than can be allocated",
-                });
-            }
-        }
-        if let Some((lo, hi)) = &self.bounds {
-            check::len("lower bounds", lo.len(), n)?;
-            check::len("upper bounds", hi.len(), n)?;
-            for (index, (&l, &u)) in lo.iter().zip(hi).enumerate() {
-                if !l.is_finite() || !u.is_finite() || l > u {
-                    return Err(Error::InvalidBounds {
-                        index,
-                        lower: l,
-                        upper: u,
-                    });
-                }
-            }
-            check::inside("x0", x0, lo, hi)?;
-        }
-        if !(0.0..1.0).contains(&self.polish) {
-            return Err(Error::InvalidParameter {
-                name: "polish",
-                value: self.polish.into(),
-                reason: "must be a fraction of the budget in [0, 1)",
-            });
-        }
-        if self.polish > 0.0 && self.strategy == Strategy::Adaptive {
-            return Err(Error::InvalidParameter {
-                name: "polish",
-                value: self.polish.into(),
-                reason: "polishes the paper's loop: it needs Strategy::Paper",
-            });
-        }
-        if let Strategy::Paper {
-            samples,
-            lr,
-            sigma0,
-        } = self.strategy
-        {
-            if samples == 0 {
-                return Err(Error::ZeroSamples);
-            }
-            if samples % 2 == 1 {
-                return Err(Error::OddSamples(samples));
-            }
-            check::positive("lr", lr)?;
-            check::positive("sigma0", sigma0)?;
-        }
-        Ok(budget)
     }
 }

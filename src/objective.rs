@@ -152,3 +152,10 @@ macro_rules! debug_by_type_name {
 }
 
 debug_by_type_name!(Seeded, Batch);
+
+/// The objective of a run whose points are evaluated elsewhere:
+/// [`crate::Minimizer::without_objective`] and
+/// [`crate::PlateauFreeGradient::without_objective`] hold it. It is no [`Objective`], so
+/// that nothing can evaluate it by mistake.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct NoObjective;

@@ -14,18 +14,16 @@
 
 use std::f64::consts::PI;
 use std::fmt;
-use std::str::FromStr;
 
 use rand::{Rng, RngExt};
 use rand_distr::{ChiSquared, Distribution, StandardNormal};
 
-use crate::error::Error;
 use crate::kernel::{chi_mean, rayleigh_inverse_cdf, unit_open_closed};
 
 /// How the perturbations of one estimate are drawn.
 ///
 /// Its name, as a command line or a CSV file spells it, is one of `radial`,
-/// `per-coordinate`, `gaussian`: [`Display`](fmt::Display) writes it, [`FromStr`] reads it
+/// `per-coordinate`, `gaussian`: [`Display`](fmt::Display) writes it, [`FromStr`](std::str::FromStr) reads it
 /// (ignoring ASCII case), and with the `serde` feature it is the serialised form too.
 ///
 /// ```
@@ -284,25 +282,6 @@ impl fmt::Display for Sampling {
     }
 }
 
-impl FromStr for Sampling {
-    type Err = Error;
-
-    /// Reads `radial`, `per-coordinate` or `gaussian`, ignoring ASCII case.
-    ///
-    /// # Errors
-    /// [`Error::UnknownName`] for any other text, naming it and the accepted spellings.
-    fn from_str(text: &str) -> Result<Self, Error> {
-        Sampling::ALL
-            .into_iter()
-            .find(|s| s.name().eq_ignore_ascii_case(text.trim()))
-            .ok_or_else(|| Error::UnknownName {
-                what: "sampling",
-                value: text.to_owned(),
-                allowed: "radial, per-coordinate, gaussian",
-            })
-    }
-}
-
 /// Fills `z` with standard normals.
 ///
 fn fill_normal<R: Rng + ?Sized>(rng: &mut R, z: &mut [f64]) {
@@ -432,25 +411,6 @@ mod tests {
         }
         for k in 0..count {
             assert!((norm2(&w[k * n..(k + 1) * n]) - chi_mean(n)).abs() < 1e-12);
-        }
-    }
-
-    #[test]
-    fn names_round_trip_and_unknown_names_are_errors() {
-        for s in Sampling::ALL {
-            assert_eq!(s.to_string().parse::<Sampling>(), Ok(s));
-            assert_eq!(s.name().to_uppercase().parse::<Sampling>(), Ok(s));
-        }
-        match "percoordinate".parse::<Sampling>() {
-            Err(Error::UnknownName {
-                what,
-                value,
-                allowed,
-            }) => {
-                assert_eq!((what, value.as_str()), ("sampling", "percoordinate"));
-                assert!(allowed.contains("per-coordinate"));
-            }
-            other => panic!("{other:?}"),
         }
     }
 

@@ -5,10 +5,9 @@ use std::fmt;
 use super::evaluate::{evaluate_parallel, evaluate_sequential, panic_message, Batch};
 use super::steps::{Spreads, Uniform};
 use super::{Core, Estimate, GradientEstimator, OnFailure, Panic};
-use crate::ask_tell::NoObjective;
 use crate::check;
 use crate::error::Error;
-use crate::objective::{Objective, Points};
+use crate::objective::{NoObjective, Objective, Points};
 use crate::sampling::Sampling;
 
 /// Evaluates the objective at the points; with `catch`, a panic of `f` is caught and

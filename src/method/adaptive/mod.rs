@@ -1,19 +1,21 @@
-//! The adaptive search of [`super::AskTell`] between asks.
+//! The adaptive search, written once, as a state machine between asks: runs of a Gaussian
+//! search distribution (`gaussian.rs`: its draws and its update) from the start or the best
+//! point seen, each restart with twice the population, until the budget is spent, the
+//! target reached, or (without restarts) a run converges. [`crate::Strategy::Adaptive`] of
+//! [`crate::AskTell`], and the polish after the paper's loop (`../polished.rs`).
+
+mod gaussian;
 
 use nalgebra::DVector;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use super::{count, non_finite, AskTell, Best};
-use crate::adaptive::{rng, Params, SearchGaussian};
 use crate::error::Error;
-use crate::minimize::{Metric, Minimum, Options, Stop, FULL_METRIC_MAX_DIM};
 use crate::objective::Points;
-
-/// Mixed into the seed for the polish's random stream, so that it is not the loop's.
-const POLISH_STREAM: u64 = 0x706f_6c69_7368_0001;
+use crate::run::{Ask, Ledger, Metric, Minimum, Options, Stop, FULL_METRIC_MAX_DIM};
+use gaussian::{rng, Params, SearchGaussian};
 
 /// The adaptive search between asks: `Minimizer`'s loop over runs and generations, unrolled.
-pub(super) struct Adaptive {
+pub(crate) struct Adaptive {
     rng: Xoshiro256PlusPlus,
     sigma0: f64,
     scales: Vec<f64>,
@@ -27,12 +29,12 @@ pub(super) struct Adaptive {
     /// The asked generation's offsets (repaired onto the bounds), while its values are
     /// awaited.
     asked: Option<Vec<DVector<f64>>>,
-    pub(super) points: Vec<f64>,
-    pub(super) seeds: Vec<u64>,
+    points: Vec<f64>,
+    seeds: Vec<u64>,
 }
 
 impl Adaptive {
-    pub(super) fn new(o: &Options, x0: &[f64]) -> Adaptive {
+    pub(crate) fn new(o: &Options, x0: &[f64]) -> Adaptive {
         let n = x0.len();
         // The start spread and the covariance's starting scales: from the box, else from x0.
         let (sigma0, scales) = match (&o.bounds, o.sigma0) {
@@ -73,31 +75,21 @@ impl Adaptive {
         }
     }
 
-    /// The polish after the paper's loop: a search from the loop's best point `x` whose
-    /// spread starts at the loop's last one, with its own random stream, counting iterations
-    /// on from the loop's.
-    pub(super) fn polishing(o: &Options, x: &[f64], loop_end: &Minimum) -> Adaptive {
-        let mut start = o.clone();
-        start.sigma0 = Some(loop_end.sigma);
-        start.seed = o.seed ^ POLISH_STREAM;
-        let mut adaptive = Adaptive::new(&start, x);
-        adaptive.iterations = loop_end.iterations;
-        adaptive
+    /// The same search counting its iterations on from `iterations` (the polish continues
+    /// the paper's loop's count).
+    pub(crate) fn counting_from(mut self, iterations: usize) -> Adaptive {
+        self.iterations = iterations;
+        self
     }
 
     /// The spread of the first generation.
-    pub(super) fn start_sigma(&self) -> f64 {
+    pub(crate) fn start_sigma(&self) -> f64 {
         self.sigma0
     }
 
-    /// Draws the next generation into `points` and `seeds`.
-    pub(super) fn ask(
-        &mut self,
-        o: &Options,
-        budget: usize,
-        evaluations: usize,
-        n: usize,
-    ) -> Result<(), Error> {
+    /// Draws the next generation: its points and their seeds.
+    pub(crate) fn ask(&mut self, ledger: &Ledger) -> Result<Ask<'_>, Error> {
+        let (n, o) = (self.start.len(), &ledger.options);
         if self.asked.is_some() {
             return Err(Error::AskPending);
         }
@@ -114,7 +106,7 @@ impl Adaptive {
             dist
         });
         let mut ys = dist.sample(&mut self.rng).ys;
-        let count = ys.len().min(budget - evaluations);
+        let count = ys.len().min(ledger.left());
         ys.truncate(count);
         self.points.clear();
         for y in ys.iter_mut() {
@@ -135,7 +127,7 @@ impl Adaptive {
         }
         if let Some(index) = self.points.iter().position(|v| !v.is_finite()) {
             return Err(Error::NonFinitePoint {
-                sample: evaluations + index / n,
+                sample: ledger.evaluations + index / n,
                 index: index % n,
                 value: self.points[index],
             });
@@ -144,59 +136,41 @@ impl Adaptive {
         self.seeds.clear();
         self.seeds.resize(count, seed);
         self.asked = Some(ys);
-        Ok(())
+        Ok(Ask::new(Points::new(&self.points, n), &self.seeds))
     }
 
     /// Takes the asked generation's values: the best point, the budget, the target, the
     /// distribution's update and, when a run ends, the restart. Returns the result once the
     /// whole run has ended.
-    pub(super) fn tell(
+    pub(crate) fn tell(
         &mut self,
-        o: &Options,
-        budget: usize,
-        evaluations: &mut usize,
-        best: &mut Best,
+        ledger: &mut Ledger,
         values: &[f64],
-        n: usize,
     ) -> Result<Option<Minimum>, Error> {
         let (Some(ys), Some(dist)) = (&self.asked, &mut self.dist) else {
             return Err(Error::NothingAsked);
         };
-        let points = Points::new(&self.points, n);
-        count(ys.len(), values.len())?;
-        non_finite(values, points, *evaluations)?;
-        best.see(points, values);
-        let count = values.len();
-        *evaluations += count;
+        ledger.take(Points::new(&self.points, self.start.len()), values)?;
         self.iterations += 1;
-        let end = |stop, sigma| {
-            Some(AskTell::minimum(
-                best,
-                *evaluations,
-                self.iterations,
-                self.restarts,
-                sigma,
-                stop,
-            ))
-        };
-        if o.target.is_some_and(|t| best.fun <= t) {
+        let end = |stop, sigma| Some(ledger.minimum(self.iterations, self.restarts, sigma, stop));
+        if ledger.target_reached() {
             return Ok(end(Stop::Target, dist.sigma));
         }
-        if *evaluations >= budget || count < dist.p.lambda {
+        if ledger.evaluations >= ledger.budget || values.len() < dist.p.lambda {
             return Ok(end(Stop::Budget, dist.sigma));
         }
         let ended = dist.update(ys, values).is_some();
         let sigma = dist.sigma;
         self.asked = None;
         if ended {
+            let o = &ledger.options;
             if !o.restarts {
-                let result = end(Stop::Converged, sigma);
-                return Ok(result);
+                return Ok(end(Stop::Converged, sigma));
             }
             self.restarts += 1;
             self.lambda *= 2;
             if o.restart_from_best {
-                self.start.clone_from(&best.x);
+                self.start.clone_from(&ledger.best.x);
             }
             self.dist = None;
         }

@@ -1,5 +1,5 @@
-//! The adaptive search distribution behind [`crate::minimize`]: a Gaussian whose mean, spread
-//! and covariance follow the function.
+//! The adaptive search's distribution: a Gaussian whose mean, spread and covariance follow
+//! the function, its draws and its update (one generation of the search, `mod.rs`).
 //!
 //! Each generation draws `lambda` points `x_k = m + sigma * y_k`, `y_k ~ N(0, C)`, ranks them by
 //! `f`, and moves the mean along the rank-weighted sum of the best offsets. That sum is the

@@ -1,10 +1,12 @@
-//! The paper's loop ([`Optimizer`] with a [`PlateauFreeGradient`]), asked and told.
+//! The paper's loop ([`Optimizer`] with a [`PlateauFreeGradient`]), asked and told: the
+//! loop's engine (`mod.rs`) driven point by point, the estimator split into its draws and
+//! its finish ([`Core`]) so that the points can be evaluated elsewhere.
 
-use super::{count, Ask};
+use super::{Optimizer, Progress};
 use crate::check;
 use crate::error::Error;
 use crate::estimator::{Core, Estimate, Pending, PlateauFreeGradient};
-use crate::optimize::{History, Optimizer, OptimizerState, Progress, RunError};
+use crate::run::{count, Ask, History, OptimizerState, RunError};
 
 /// The paper's loop ([`Optimizer`] with a [`PlateauFreeGradient`]), asked and told: each
 /// iteration asks for the `N` points of one gradient estimate and takes the Adam step when
@@ -34,8 +36,8 @@ use crate::optimize::{History, Optimizer, OptimizerState, Progress, RunError};
 #[derive(Debug)]
 pub struct PaperAskTell {
     optimizer: Optimizer,
-    /// The estimator; [`super::Paper`] reads the told points from it.
-    pub(super) core: Core,
+    /// The estimator; [`crate::method::polished`] reads the told points from it.
+    pub(crate) core: Core,
     progress: Progress,
     /// The iteration in progress: its spread and its estimate (drawn, or to be redrawn).
     current: Option<(f64, Pending)>,
@@ -85,16 +87,8 @@ impl Optimizer {
                 state: Box::new(state),
             });
         }
-        let (progress, position) = self.resume(state)?;
-        if let Some((lower, upper)) = self.adam().box_bounds() {
-            // Adam's box is the run's: every asked point is clamped onto it.
-            if let Err(error) = core.set_bounds(lower, upper) {
-                return Err(RunError {
-                    error,
-                    state: Box::new(self.state_of(progress, position)),
-                });
-            }
-        }
+        let (progress, position) =
+            self.begin(state, |lower, upper| core.set_bounds(lower, upper))?;
         if let Some(position) = position {
             core.set_position(position);
         }
@@ -144,10 +138,8 @@ impl PaperAskTell {
         }
         self.current = Some((sigma, pending));
         self.asked = true;
-        Ok(Some(Ask {
-            points: self.core.points(self.progress.theta.len()),
-            seeds: self.core.seeds(),
-        }))
+        let points = self.core.points(self.progress.theta.len());
+        Ok(Some(Ask::new(points, self.core.seeds())))
     }
 
     /// Tells the values of the asked points, in their order: finishes the estimate and

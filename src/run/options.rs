@@ -1,0 +1,183 @@
+//! The options of a [`Minimizer`] run: the strategy, the metric, and the rest of the
+//! builder's settings as one value ([`Options`]), which both the callback form
+//! ([`Minimizer::run`]) and the ask-and-tell run ([`crate::AskTell`]) take.
+
+use crate::check;
+use crate::error::Error;
+// For the documentation's links only.
+#[cfg(doc)]
+use crate::Minimizer;
+
+/// The search method of a [`Minimizer`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Strategy {
+    /// The default: a Gaussian search distribution with adaptive spread and metric, flat-step
+    /// growth of the spread on plateaus, and restarts from the best point with a doubled
+    /// population. Needs no step size or learning rate.
+    Adaptive,
+    /// The paper's loop: the plateau-free gradient ([`crate::PlateauFreeGradient`], radial
+    /// sampler, antithetic pairs) with `samples` evaluations per estimate, [`crate::Adam`]
+    /// with learning rate `lr`, and [`crate::Annealer::paper`] from `sigma0` over the
+    /// iterations the budget allows (`(budget - 2) / samples`: the first evaluation is at the
+    /// start, the last at the final parameters; a budget too small for an iteration
+    /// evaluates the start alone). With bounds, every perturbed point is clamped onto the
+    /// box and every step projected onto it.
+    Paper {
+        /// `N`, evaluations of `f` per gradient estimate (even).
+        samples: usize,
+        /// Adam's learning rate.
+        lr: f64,
+        /// The starting spread of the annealer.
+        sigma0: f64,
+    },
+}
+
+/// The metric (covariance) the search distribution learns.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Metric {
+    /// Full up to `n = 200`, diagonal above (the default).
+    #[default]
+    Auto,
+    /// A full covariance: learns rotated, ill-conditioned metrics; `O(n^2)` per evaluation
+    /// and `O(n^3)` per eigendecomposition (every few iterations).
+    Full,
+    /// A diagonal covariance: per-coordinate spreads only, `O(n)` per evaluation (separable
+    /// CMA-ES, Ros and Hansen 2008, positive weights only). For large `n`; slow on rotated,
+    /// ill-conditioned functions.
+    Diagonal,
+}
+
+/// The largest dimension for which [`Metric::Auto`] learns a full covariance.
+pub const FULL_METRIC_MAX_DIM: usize = 200;
+
+/// A [`Minimizer`]'s options: everything but the objective, which is all an ask-and-tell
+/// run needs.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Options {
+    pub(crate) budget: Option<usize>,
+    pub(crate) seed: u64,
+    pub(crate) sigma0: Option<f64>,
+    pub(crate) bounds: Option<(Vec<f64>, Vec<f64>)>,
+    pub(crate) target: Option<f64>,
+    pub(crate) population: Option<usize>,
+    pub(crate) restarts: bool,
+    pub(crate) mirrored: bool,
+    pub(crate) flat_growth: bool,
+    pub(crate) metric: Metric,
+    pub(crate) restart_from_best: bool,
+    pub(crate) strategy: Strategy,
+    pub(crate) polish: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            budget: None,
+            seed: 0,
+            sigma0: None,
+            bounds: None,
+            target: None,
+            population: None,
+            restarts: true,
+            mirrored: true,
+            flat_growth: true,
+            metric: Metric::Auto,
+            restart_from_best: true,
+            strategy: Strategy::Adaptive,
+            polish: 0.0,
+        }
+    }
+}
+
+impl Options {
+    /// Checks the options and the start; returns the budget.
+    pub(crate) fn check(&self, x0: &[f64]) -> Result<usize, Error> {
+        check::theta(x0)?;
+        let n = x0.len();
+        let budget = self.budget.unwrap_or(1000 * n);
+        if budget == 0 {
+            return Err(Error::InvalidParameter {
+                name: "budget",
+                value: 0usize.into(),
+                reason: "must be at least 1 evaluation",
+            });
+        }
+        if let Some(s) = self.sigma0 {
+            check::positive("sigma0", s)?;
+        }
+        if let Some(t) = self.target {
+            if t.is_nan() {
+                return Err(Error::InvalidParameter {
+                    name: "target",
+                    value: t.into(),
+                    reason: "must not be NaN",
+                });
+            }
+        }
+        if let Some(p) = self.population {
+            if p < 2 {
+                return Err(Error::InvalidParameter {
+                    name: "population",
+                    value: p.into(),
+                    reason: "must be at least 2",
+                });
+            }
+            // A generation's points are held at once: a population too large for memory is
+            // an error here rather than a panic or an abort when the first generation is drawn.
+            let fits = p
+                .checked_mul(n)
+                .is_some_and(|len| Vec::<f64>::new().try_reserve_exact(len).is_ok());
+            if !fits {
+                return Err(Error::InvalidParameter {
+                    name: "population",
+                    value: p.into(),
+                    reason: "times the dimension is more memory than can be allocated",
+                });
+            }
+        }
+        if let Some((lo, hi)) = &self.bounds {
+            check::len("lower bounds", lo.len(), n)?;
+            check::len("upper bounds", hi.len(), n)?;
+            for (index, (&l, &u)) in lo.iter().zip(hi).enumerate() {
+                if !l.is_finite() || !u.is_finite() || l > u {
+                    return Err(Error::InvalidBounds {
+                        index,
+                        lower: l,
+                        upper: u,
+                    });
+                }
+            }
+            check::inside("x0", x0, lo, hi)?;
+        }
+        if !(0.0..1.0).contains(&self.polish) {
+            return Err(Error::InvalidParameter {
+                name: "polish",
+                value: self.polish.into(),
+                reason: "must be a fraction of the budget in [0, 1)",
+            });
+        }
+        if self.polish > 0.0 && self.strategy == Strategy::Adaptive {
+            return Err(Error::InvalidParameter {
+                name: "polish",
+                value: self.polish.into(),
+                reason: "polishes the paper's loop: it needs Strategy::Paper",
+            });
+        }
+        if let Strategy::Paper {
+            samples,
+            lr,
+            sigma0,
+        } = self.strategy
+        {
+            if samples == 0 {
+                return Err(Error::ZeroSamples);
+            }
+            if samples % 2 == 1 {
+                return Err(Error::OddSamples(samples));
+            }
+            check::positive("lr", lr)?;
+            check::positive("sigma0", sigma0)?;
+        }
+        Ok(budget)
+    }
+}
