@@ -51,6 +51,10 @@
 //!   [`Ask`] gives an iteration's points and one seed per point; `tell` takes their values
 //!   and takes the step. The callback forms are written on them: the same options and seed
 //!   give the same bits ([`NoObjective`] stands in for the objective a run does not need).
+//! - [`LeastSquares`]: for an objective that returns many numbers (a residual image): the
+//!   Gaussian-smoothed Jacobian by Stein's identity on a [`Sparsity`] pattern
+//!   ([`smoothed_jacobian`]) and damped Gauss-Newton steps on the smoothed residuals, as ask
+//!   and tell ([`LeastSquaresAskTell`]) or with a callback; see the [`vector`] module.
 //! - [`baseline`]: finite differences and SPSA, for comparison on the same loop.
 //! - [`kernel`]: the Gaussian kernel, the inverse CDF of its derivative, `c_n`.
 //! - [`seeding`]: how every random stream is seeded (SplitMix64 of the seed, the estimate's
@@ -119,6 +123,7 @@ mod objective;
 mod optimize;
 mod sampling;
 pub mod seeding;
+pub mod vector;
 
 pub use adam::{Adam, AdamMoments};
 pub use anneal::{Annealer, Schedule, PAPER_SIGMA_MIN, PAPER_WARMUP};
@@ -130,6 +135,10 @@ pub use minimize::{minimize, Metric, Minimizer, Minimum, Stop, Strategy, FULL_ME
 pub use objective::{Batch, Objective, Points, Seeded};
 pub use optimize::{History, HistoryKeep, Optimizer, OptimizerState, RunError, Step};
 pub use sampling::Sampling;
+pub use vector::{
+    smoothed_jacobian, Acceptance, JacobianEstimate, LeastSquares, LeastSquaresAskTell, Sparsity,
+    VectorAsk, VectorMinimum,
+};
 
 /// The README's examples, compiled and run as doctests so that they stay true.
 #[doc = include_str!("../README.md")]
