@@ -134,10 +134,10 @@ def least_squares(
         raise ValueError(f"acceptance = {acceptance!r} is invalid: expected 'descent' or 'always'")
     if not isinstance(smoothed_residuals, (bool, np.bool_)):
         raise ValueError(f"smoothed_residuals = {smoothed_residuals!r} is invalid: must be True or False")
-    counts = {k: _count(k, v) for k, v in (("budget", budget), ("pairs", pairs), ("memory", memory), ("seed", seed))}
-    for k in ("budget", "pairs", "memory"):
-        if counts[k] < 1:
-            raise ValueError(f"{k} = {counts[k]} is invalid: must be at least 1")
+    counts = {name: _count(name, v) for name, v in (("budget", budget), ("pairs", pairs), ("memory", memory), ("seed", seed))}
+    for name in ("budget", "pairs", "memory"):
+        if counts[name] < 1:
+            raise ValueError(f"{name} = {counts[name]} is invalid: must be at least 1")
     if not 0 <= counts["seed"] < 2**64:
         raise ValueError(f"seed = {counts['seed']} is invalid: must be in [0, 2**64)")
     box = None
