@@ -53,6 +53,10 @@
 //!   give the same bits ([`NoObjective`] stands in for the objective a run does not need).
 //! - `argmin` (feature `argmin`): the estimate as [argmin](https://argmin-rs.org)'s
 //!   `Gradient`, so that its steepest descent and L-BFGS run on plateau-ridden functions.
+//! - [`LeastSquares`]: for an objective that returns many numbers (a residual image): the
+//!   Gaussian-smoothed Jacobian by Stein's identity on a [`Sparsity`] pattern
+//!   ([`smoothed_jacobian`]) and damped Gauss-Newton steps on the smoothed residuals, as ask
+//!   and tell ([`LeastSquaresAskTell`]) or with a callback; see the [`vector`] module.
 //! - [`baseline`]: finite differences and SPSA, for comparison on the same loop.
 //! - [`kernel`]: the Gaussian kernel, the inverse CDF of its derivative, `c_n`.
 //! - [`seeding`]: how every random stream is seeded (SplitMix64 of the seed, the estimate's
@@ -130,6 +134,7 @@ mod optimize;
 mod run;
 mod sampling;
 pub mod seeding;
+pub mod vector;
 
 pub use adam::{Adam, AdamMoments};
 pub use anneal::{Annealer, Schedule, PAPER_SIGMA_MIN, PAPER_WARMUP};
@@ -145,6 +150,10 @@ pub use run::{
     FULL_METRIC_MAX_DIM,
 };
 pub use sampling::Sampling;
+pub use vector::{
+    smoothed_jacobian, Acceptance, JacobianEstimate, LeastSquares, LeastSquaresAskTell, Sparsity,
+    VectorAsk, VectorMinimum,
+};
 
 /// The README's examples, compiled and run as doctests so that they stay true.
 #[doc = include_str!("../README.md")]

@@ -21,6 +21,8 @@ The main entry points:
 - :func:`ask_tell` -- the same runs with the points evaluated by the caller:
   ``es = ask_tell(x0)``, then ``X, seeds = es.ask()`` and ``es.tell(values)``
   until ``es.done``; ``es.result`` is :func:`minimize`'s result.
+- :func:`least_squares` -- for a ``fun`` that returns an array (a residual image): the
+  Gaussian-smoothed Jacobian on a sparsity pattern and damped Gauss-Newton steps.
 - :class:`FiniteDifference`, :class:`Spsa` -- the baselines (also in ``plateau_free.baseline``).
 - :class:`OptionTypeError` -- an option of the wrong type: a ValueError (as every bad option)
   and a TypeError.
@@ -37,6 +39,7 @@ serialised, one at a time per object, in the order the threads get its lock.
 from __future__ import annotations
 
 from ._ask_tell import AskTell, ask_tell
+from ._least_squares import least_squares
 from ._minimize import minimize
 from ._native import (
     PAPER_SIGMA_MIN,
@@ -66,11 +69,12 @@ __all__ = [
     "Sampling",
     "Spsa",
     "ask_tell",
+    "least_squares",
     "minimize",
 ]
 
 # The public names live in the private modules below (one job each: _types, _result,
 # _options, _minimize, _ask_tell); they are shown, and pickled, as ``plateau_free``'s own.
-for _public in (AskTell, History, OptimizeResult, Sampling, ask_tell, minimize):
+for _public in (AskTell, History, OptimizeResult, Sampling, ask_tell, least_squares, minimize):
     _public.__module__ = __name__
 del _public

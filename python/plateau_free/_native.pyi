@@ -231,6 +231,31 @@ class _AskTell:
     def best(self) -> tuple[Any, float] | None: ...
     def result(self) -> dict[str, Any] | None: ...
 
+class _LeastSquares:
+    """The Rust side of ``plateau_free.least_squares``: a ``LeastSquaresAskTell`` run."""
+
+    def __init__(
+        self,
+        x0: list[float],
+        outputs: int,
+        sparsity: list[tuple[int, int]] | None,
+        budget: int,
+        sigma0: float,
+        pairs: int,
+        memory: int,
+        damping: float,
+        max_step: float,
+        acceptance_name: str,
+        smoothed_residuals: bool,
+        bounds: tuple[list[float], list[float]] | None,
+        seed: int,
+    ) -> None: ...
+    def ask(self) -> tuple[Any, Any] | None: ...
+    def tell(self, outputs: list[float]) -> None: ...
+    @property
+    def evaluations(self) -> int: ...
+    def result(self) -> tuple[list[float], float, list[float], int, int, int]: ...
+
 def _minimize(
     estimator: Any,
     x0: Any,

@@ -69,8 +69,9 @@ struct RunOptions {
     /// of the N x iterations evaluations, then the library's adaptive search from its best
     /// point; plateau: the paper's loop alone; fd (central finite differences) or spsa in the
     /// paper's loop; adaptive: the library's Minimizer alone (no loop, no learning rate) with
-    /// the same evaluations, sigma0, bounds and seed [default: polished; plateau with
-    /// --budget].
+    /// the same evaluations, sigma0, bounds and seed; image: Gauss-Newton on the residual
+    /// image with the smoothed Jacobian on the task's footprint (N / 2 pairs per Jacobian,
+    /// N x iterations renders) [default: polished; plateau with --budget].
     #[arg(long, value_enum)]
     method: Option<Method>,
     /// Renderer seeds: fixed (every render uses the run's seed, as the paper's code) or pair
@@ -253,7 +254,7 @@ fn check_combination(opts: &RunOptions, task: &Task) -> Result<()> {
             "--samples {samples}: antithetic pairs need an even number; allowed: an even count, or add --no-antithetic"
         )));
     }
-    if let (Some(_), Some(method @ (Method::Adaptive | Method::Polished))) =
+    if let (Some(_), Some(method @ (Method::Adaptive | Method::Polished | Method::Image))) =
         (opts.budget, opts.method)
     {
         return Err(usage(format!(

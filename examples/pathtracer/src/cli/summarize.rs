@@ -80,6 +80,7 @@ pub(super) fn method_label(s: &run::Summary) -> String {
         run::Method::Polished => "paper loop, polished".into(),
         run::Method::Fd => "finite difference".into(),
         run::Method::Spsa => "SPSA".into(),
+        run::Method::Image => "image (Gauss-Newton)".into(),
     }
 }
 

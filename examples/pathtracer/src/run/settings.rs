@@ -42,6 +42,11 @@ pub enum Method {
     /// of the evaluations, then the adaptive search from its best point at its last spread
     /// (`plateau_free::Minimizer::polish(0.25)` with `Strategy::Paper`).
     Polished,
+    /// The image, not one number: damped Gauss-Newton on the residual image (rendered minus
+    /// reference, per pixel and channel) with the Gaussian-smoothed Jacobian estimated on the
+    /// task's footprint (`plateau_free::LeastSquares`): N / 2 antithetic pairs per Jacobian,
+    /// sigma0 annealed over the N x iterations renders, the task's box and the run's seed.
+    Image,
 }
 
 /// Which renderer seed each evaluation uses.
@@ -143,7 +148,7 @@ impl Method {
 
     /// Whether the method draws antithetic pairs (and so needs an even N).
     pub fn pairs(self) -> bool {
-        matches!(self, Method::Plateau | Method::Polished)
+        matches!(self, Method::Plateau | Method::Polished | Method::Image)
     }
 
     /// The spelling of `--method` for this method.
@@ -154,6 +159,7 @@ impl Method {
             Method::Spsa => "spsa",
             Method::Adaptive => "adaptive",
             Method::Polished => "polished",
+            Method::Image => "image",
         }
     }
 }
@@ -166,6 +172,7 @@ impl Settings {
             Method::Spsa => "SPSA".into(),
             Method::Adaptive => "adaptive search".into(),
             Method::Polished => "paper loop, polished".into(),
+            Method::Image => "image (Gauss-Newton)".into(),
             Method::Plateau => {
                 let mut s = format!("{:?}", self.sampling).to_lowercase();
                 if !self.antithetic {

@@ -62,6 +62,12 @@ pub trait Scenario: Send + Sync {
     /// The scene at parameters `theta` seen by `camera` (the task's [`Shot`] after the
     /// [`View`]'s overrides); static parts are shared, built once in the constructor.
     fn scene(&self, theta: &[f64], camera: Camera) -> Scene;
+    /// Which parameters each value of the image (pixel and channel, in [`Image::data`]'s
+    /// order) can depend on, derived from the scene seen by `camera`; `None`: any pixel on
+    /// any parameter (the default).
+    fn footprint(&self, _camera: Camera) -> Option<plateau_free::Sparsity> {
+        None
+    }
 }
 
 /// A row of [`TASKS`]: name, scenario, camera, max depth, unit box, defaults.
@@ -272,6 +278,23 @@ impl Task {
     /// The scene at parameters `theta` (static parts are shared, built once).
     pub fn scene(&self, theta: &[f64], view: View) -> Scene {
         self.scenario.scene(theta, self.camera.camera(view))
+    }
+
+    /// Which parameters each value of the image (pixel and channel) can depend on, from the
+    /// scene ([`Scenario::footprint`]); every pixel on every parameter when the task does
+    /// not say.
+    ///
+    /// # Errors
+    /// A pattern the library refuses (an empty image).
+    pub fn footprint(&self, view: View) -> Result<plateau_free::Sparsity, plateau_free::Error> {
+        let camera = self.camera.camera(view);
+        match self.scenario.footprint(camera) {
+            Some(pattern) => Ok(pattern),
+            None => plateau_free::Sparsity::dense(
+                3 * camera.width as usize * camera.height as usize,
+                self.dim(),
+            ),
+        }
     }
 
     /// Render the scene at parameters theta: cheap to call thousands of times (static

@@ -6,6 +6,8 @@ use std::f64::consts::TAU;
 
 use glam::{Vec3, Vec3A};
 
+#[cfg(test)]
+use super::View;
 use super::{Aim, Scenario, Shot};
 use crate::render::{Camera, Geometry, Lights, Material, Quad, Scene, Texture};
 
@@ -45,6 +47,56 @@ fn reference(u: f64, v: f64) -> [f64; 3] {
 }
 
 impl Scenario for TextureTask {
+    /// Each pixel's texels: the corners of the pixel are traced through the camera onto the
+    /// textured quad, and the pixel's channel `c` depends on channel `c` of every texel the
+    /// bilinear lookup can reach from the UV rectangle they span (the rectangle, widened to
+    /// the lookup's neighbours). A pixel that misses the quad depends on nothing. Derived
+    /// from the scene, so a changed camera or resolution changes the pattern with it.
+    fn footprint(&self, camera: Camera) -> Option<plateau_free::Sparsity> {
+        let scene = self.scene(&[], camera);
+        let (w, h) = (camera.width as usize, camera.height as usize);
+        let side = SIDE as f32;
+        let texels = |lo: f32, hi: f32| {
+            // The lookup at x reads texels floor(x) and floor(x) + 1, x = u * SIDE - 0.5,
+            // clamped onto the texture.
+            let first = (lo * side - 0.5).floor().clamp(0.0, side - 1.0) as usize;
+            let last = ((hi * side - 0.5).floor() + 1.0).clamp(0.0, side - 1.0) as usize;
+            first..=last
+        };
+        let pattern = plateau_free::Sparsity::from_fn(3 * w * h, DIM, |value, row| {
+            let (pixel, channel) = (value / 3, value % 3);
+            let (x, y) = ((pixel % w) as u32, (pixel / w) as u32);
+            let mut uv = Vec::with_capacity(4);
+            for (jx, jy) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
+                let d = camera.direction(x, y, jx, jy);
+                if let Some((_, hit)) = scene.geometry.intersect(camera.origin(), d, f32::INFINITY)
+                {
+                    uv.push(hit.uv);
+                }
+            }
+            if uv.is_empty() {
+                return;
+            }
+            let fold = |f: fn(f32, f32) -> f32, init: f32, pick: fn(&glam::Vec2) -> f32| {
+                uv.iter().map(pick).fold(init, f)
+            };
+            let us = texels(
+                fold(f32::min, f32::MAX, |p| p.x),
+                fold(f32::max, f32::MIN, |p| p.x),
+            );
+            let vs = texels(
+                fold(f32::min, f32::MAX, |p| p.y),
+                fold(f32::max, f32::MIN, |p| p.y),
+            );
+            for v in vs {
+                for u in us.clone() {
+                    row.push(3 * (v * SIDE as usize + u) + channel);
+                }
+            }
+        });
+        pattern.ok()
+    }
+
     fn scene(&self, theta: &[f64], camera: Camera) -> Scene {
         let texture = if theta.len() == DIM {
             Texture::from_rgb(SIDE, SIDE, theta)
@@ -96,6 +148,38 @@ impl Scenario for TextureTask {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The footprint derived from the scene: every pixel's channel on the same channel of the
+    /// texel under the pixel's centre and of at most its 3 x 3 neighbours (a texel per pixel,
+    /// read bilinearly); at half the resolution, on the 4 x 4 texels under it and their rim.
+    #[test]
+    fn the_footprint_is_the_texels_under_each_pixel() {
+        let task = crate::tasks::by_name("texture").unwrap();
+        let pattern = task.footprint(Default::default()).unwrap();
+        let side = SIDE as usize;
+        assert_eq!((pattern.outputs(), pattern.params()), (DIM, DIM));
+        assert!(pattern.max_row() <= 9, "{}", pattern.max_row());
+        for (x, y, c) in [(0, 0, 0), (5, 7, 1), (127, 127, 2), (64, 3, 0)] {
+            let value = 3 * (y * side + x) + c;
+            let row = pattern.row(value);
+            assert!(
+                row.contains(&(3 * (y * side + x) + c)),
+                "pixel ({x}, {y}): {row:?}"
+            );
+            assert!(row.iter().all(|j| j % 3 == c));
+        }
+        let half = View {
+            scale: Some(0.5),
+            ..Default::default()
+        };
+        let coarse = task.footprint(half).unwrap();
+        assert_eq!(coarse.outputs(), DIM / 4);
+        assert!(
+            coarse.max_row() <= 36 && coarse.max_row() >= 16,
+            "{}",
+            coarse.max_row()
+        );
+    }
 
     #[test]
     fn field_of_view_fits_the_plane() {
