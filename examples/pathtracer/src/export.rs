@@ -15,6 +15,8 @@
 //!   shape's normal pointing out);
 //! - `textures`: `{"file", "width", "height"}`: linear RGB in [0, 1], row 0 at v = 0,
 //!   bilinear, clamped at the edges, texel centres at half-integers;
+//! - `defaults`: the task's supplemental Table 1 row (`samples`, `sigma0`, `spp`, `lr`,
+//!   `iterations`) and `unit_box` (theta in [0, 1]^n, else unbounded);
 //! - `shapes`: `sphere` (`center`, `radius`), `quad` (corner `origin`, edges `u`, `v`, normal
 //!   u x v, texture uv = the edge fractions, `emission` for a one-sided area light facing the
 //!   normal), `box` (`to_world`: the map from the cube [-1, 1]^3) and `mesh` (`file`, an OBJ of
@@ -29,6 +31,7 @@ use glam::{Affine3A, Vec3A};
 use serde_json::{json, Value};
 
 use crate::render::{Image, Material, Scene, Settings};
+use crate::tasks::Defaults;
 
 /// The format's name and version, the first key of `scene.json`.
 pub const FORMAT: &str = "pathtracer-scene 1";
@@ -47,6 +50,8 @@ pub struct Header<'a> {
     pub theta: &'a [f64],
     /// Samples per pixel and longest path.
     pub settings: Settings,
+    /// The task's hyperparameters (supplemental Table 1) and whether theta lives in [0, 1]^n.
+    pub defaults: Option<(Defaults, bool)>,
 }
 
 /// Writes `scene.json` and its mesh and texture files into `dir` (which must exist).
@@ -113,6 +118,12 @@ pub fn describe(header: &Header, scene: &Scene, files: &mut Vec<(String, File)>)
     });
     if header.theta.len() <= THETA_INLINE {
         value["theta"] = json!(header.theta);
+    }
+    if let Some((d, unit_box)) = header.defaults {
+        value["defaults"] = json!({
+            "samples": d.samples, "sigma0": d.sigma0, "spp": d.spp, "lr": d.lr,
+            "iterations": d.iterations, "unit_box": unit_box,
+        });
     }
     value
 }
@@ -207,6 +218,7 @@ mod tests {
                 params: "target",
                 theta: &theta,
                 settings: Settings::new(4, 0, task.max_depth()),
+                defaults: Some((task.defaults(), task.bounds().is_some())),
             };
             let mut files = Vec::new();
             let v = describe(&header, &scene, &mut files);
@@ -236,6 +248,8 @@ mod tests {
             let written: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
             assert_eq!(named, written, "{}", task.name());
             assert_eq!(v.get("theta").is_some(), task.dim() <= THETA_INLINE);
+            assert_eq!(v["defaults"]["samples"], task.defaults().samples);
+            assert_eq!(v["defaults"]["unit_box"], task.bounds().is_some());
         }
     }
 
@@ -250,6 +264,7 @@ mod tests {
             params: "target",
             theta: &theta,
             settings: Settings::new(32, 0, 6),
+            defaults: None,
         };
         let v = describe(&header, &scene, &mut Vec::new());
         let hfov = v["camera"]["hfov_degrees"].as_f64().unwrap();

@@ -62,6 +62,7 @@ pub(super) fn run(args: Args) -> Result<()> {
         params: which,
         theta: &theta,
         settings: Settings::new(args.spp.unwrap_or(task.defaults().spp), 0, task.max_depth()),
+        defaults: Some((task.defaults(), task.bounds().is_some())),
     };
     std::fs::create_dir_all(&args.out)?;
     export::write(&args.out, &header, &scene)?;
