@@ -28,12 +28,13 @@ def run_ad(mi, args, seed: int, out: Path) -> dict:
     opt = mi.ad.Adam(lr=args.lr)
     opt["theta"] = mi.Vector2f(*ms.START)
     params = scene.params
+    base = ms.sphere_base()  # the centre at theta = (0, 0), from `pathtracer export shadow`
     rows = []
     t_start = time.perf_counter()
     for it in range(args.ad_iterations):
         theta = opt["theta"]
         params[scene.key] = mi.Transform4f().translate(
-            mi.Vector3f(ms.SPHERE_BASE[0], ms.SPHERE_BASE[1] + theta.x, ms.SPHERE_BASE[2] + theta.y)
+            mi.Vector3f(base[0], base[1] + theta.x, base[2] + theta.y)
         ).scale(ms.SPHERE_RADIUS)
         params.update()
         image = mi.render(scene.scene, params, seed=seed, spp=args.spp)

@@ -1,6 +1,9 @@
 """The SHADOW task of docs/tasks.md as a Mitsuba 3 scene (CPU variant ``llvm_ad_rgb``).
 
-Exactly the scene of SPEC section 2 and examples/pathtracer/src/tasks/shadow.rs:
+The scene comes from ``pathtracer export shadow`` (mitsuba_export.py turns the description
+into Mitsuba's), so examples/pathtracer/src/tasks/shadow.rs is its only definition; the
+binary is target/release/pathtracer (``cargo build --release -p pathtracer``) or
+``$PATHTRACER``. It is the scene of SPEC section 2:
 
 * pinhole camera at (17.658, 0, 0) looking along -x, +z up, horizontal field of view
   39.597755 degrees, 256x192 pixels (image right = view direction x up = +y);
@@ -11,7 +14,8 @@ Exactly the scene of SPEC section 2 and examples/pathtracer/src/tasks/shadow.rs:
 * a constant environment of radiance (0.6, 0.6, 0.99);
 * paths up to depth 6 (Mitsuba's ``max_depth``, as in our renderer).
 
-Parameters theta = (y offset, z offset) in world units, unbounded, as in our task
+The constants below name the task's numbers for the summaries and pages; the scene is checked
+against them when it is built. Parameters theta = (y offset, z offset) in world units, unbounded, as in our task
 (docs/tasks.md: "none (world units)"). Start (-0.5, 2.5), target (-1.5, 1.0).
 The loss is the mean squared error over all pixels and channels of the linear images.
 
@@ -26,7 +30,6 @@ import sys
 
 START = (-0.5, 2.5)
 TARGET = (-1.5, 1.0)
-SPHERE_BASE = (13.57, 8.05, -2.0)
 SPHERE_RADIUS = 0.5
 WIDTH, HEIGHT = 256, 192
 FOV_DEGREES = 39.597755
@@ -68,71 +71,97 @@ def load_mitsuba(variant: str = "llvm_ad_rgb"):
     return mi
 
 
-def scene_dict(mi, theta=START, spp: int = 32, scale: float = 1.0, integrator: dict | None = None):
-    """The scene description; ``scale`` multiplies the resolution (the test's short run)."""
-    T = mi.ScalarTransform4f
+def export_shadow(which_or_theta, scale: float = 1.0, spp: int = 32) -> dict:
+    """SHADOW's description from ``pathtracer export shadow`` (the task's one definition, in
+    examples/pathtracer/src/tasks/shadow.rs) at "start", "target" or the parameters given."""
+    import subprocess
+    import tempfile
+
+    import mitsuba_export as mx
+
+    with tempfile.TemporaryDirectory() as tmp:
+        if isinstance(which_or_theta, str):
+            return mx.run_export("shadow", tmp, which_or_theta, spp=spp, scale=scale)
+        params = ",".join(repr(float(t)) for t in which_or_theta)
+        subprocess.run([mx.pathtracer_binary(), "export", "shadow", f"--params={params}", "--spp", str(spp),
+                        "--scale", repr(float(scale)), "--out", tmp], check=True, stdout=subprocess.DEVNULL)
+        return mx.read_description(tmp)
+
+
+def _check_constants(desc: dict, scale: float) -> None:
+    """The constants this module names (for summaries and pages) must be the exported scene's."""
     width, height = max(1, round(WIDTH * scale)), max(1, round(HEIGHT * scale))
-    center = [SPHERE_BASE[0], SPHERE_BASE[1] + theta[0], SPHERE_BASE[2] + theta[1]]
-    return {
-        "type": "scene",
-        "integrator": integrator or {"type": "path", "max_depth": MAX_DEPTH},
-        "sensor": {
-            "type": "perspective",
-            "fov": FOV_DEGREES,
-            "fov_axis": "x",
-            "to_world": T().look_at(origin=[17.658, 0, 0], target=[0, 0, 0], up=[0, 0, 1]),
-            "sampler": {"type": "independent", "sample_count": spp},
-            "film": {
-                "type": "hdrfilm",
-                "width": width,
-                "height": height,
-                "rfilter": {"type": "box"},
-                "pixel_format": "rgb",
-            },
-        },
-        # Local z (the normal) -> +x, local x -> +y, local y -> +z; 13.16 wide.
-        "wall": {
-            "type": "rectangle",
-            "to_world": T().look_at(origin=[0, 0, 0], target=[1, 0, 0], up=[0, 0, 1]).scale([6.58, 6.58, 1]),
-            "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.7, 0.7, 0.7]}},
-        },
-        "sphere": {
-            "type": "sphere",
-            "center": center,
-            "radius": SPHERE_RADIUS,
-            "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.262, 0.0415]}},
-        },
-        "light": {
-            "type": "point",
-            "position": [25.975, 13.776, 0.0],
-            "intensity": {"type": "rgb", "value": [1715.0, 1715.0, 1715.0]},
-        },
-        "env": {"type": "constant", "radiance": {"type": "rgb", "value": [0.6, 0.6, 0.99]}},
-    }
+    sphere = desc["shapes"][0]
+    problems = []
+    if (desc["film"]["width"], desc["film"]["height"]) != (width, height):
+        problems.append(f"film {desc['film']} != {width}x{height}")
+    if abs(desc["camera"]["hfov_degrees"] - FOV_DEGREES) > 1e-4:
+        problems.append(f"fov {desc['camera']['hfov_degrees']} != {FOV_DEGREES}")
+    if desc["max_depth"] != MAX_DEPTH:
+        problems.append(f"max_depth {desc['max_depth']} != {MAX_DEPTH}")
+    if sphere["type"] != "sphere" or abs(sphere["radius"] - SPHERE_RADIUS) > 1e-6:
+        problems.append(f"first shape {sphere} is not the sphere of radius {SPHERE_RADIUS}")
+    if [round(t, 9) for t in desc.get("theta", [])] != list(START):
+        problems.append(f"start {desc.get('theta')} != {START}")
+    if problems:
+        raise RuntimeError("mitsuba_scene.py and `pathtracer export shadow` disagree: " + "; ".join(problems))
+
+
+def scene_dict(mi, theta=START, spp: int = 32, scale: float = 1.0, integrator: dict | None = None):
+    """The scene as Mitsuba reads it, from ``pathtracer export shadow`` (mitsuba_export.py)
+    at ``theta``; ``scale`` multiplies the resolution (the test's short run)."""
+    import mitsuba_export as mx
+
+    at_start = tuple(float(t) for t in theta) == START
+    desc = export_shadow("start" if at_start else theta, scale, spp)
+    if at_start:
+        _check_constants(desc, scale)
+    return mx.scene_dict(mi, desc, spp, integrator)
+
+
+def sphere_base() -> tuple[float, float, float]:
+    """The sphere's centre at theta = (0, 0), from the export (Mitsuba's AD moves it by
+    (0, theta0, theta1) from there, as the task does: docs/tasks.md, SHADOW)."""
+    c = export_shadow((0.0, 0.0))["shapes"][0]["center"]
+    return (float(c[0]), float(c[1]), float(c[2]))
 
 
 class ShadowScene:
-    """The loaded scene: ``render(theta, seed)`` -> linear RGB image as a numpy array."""
+    """The loaded scene: ``render(theta, seed)`` -> linear RGB image as a numpy array.
+
+    Built from ``pathtracer export shadow --initial``; ``set_theta`` asks the exporter where
+    the sphere is at theta (a few milliseconds beside a render), so that the Rust task is the
+    only definition of how the parameters move the scene."""
 
     def __init__(self, mi, spp: int = 32, scale: float = 1.0, integrator: dict | None = None):
         self.mi = mi
         self.spp = spp
+        self.scale = scale
         self.scene = mi.load_dict(scene_dict(mi, START, spp, scale, integrator))
         self.params = mi.traverse(self.scene)
         self.key = self._center_key()
+        self._centers: dict[tuple[float, ...], list[float]] = {}
 
     def _center_key(self) -> str:
         for k in self.params.keys():
-            if k.startswith("sphere.") and k.endswith("center"):
+            if k.startswith("shape_0000_sphere.") and k.endswith("center"):
                 return k
         for k in self.params.keys():
-            if k.startswith("sphere.") and k.endswith("to_world"):
+            if k.startswith("shape_0000_sphere.") and k.endswith("to_world"):
                 return k
         raise KeyError(f"no sphere position among {list(self.params.keys())}")
 
+    def center(self, theta) -> list[float]:
+        """The sphere's centre at ``theta``, from the exporter (cached)."""
+        key = tuple(float(t) for t in theta)
+        if key not in self._centers:
+            desc = export_shadow(key, self.scale, self.spp)
+            self._centers[key] = [float(c) for c in desc["shapes"][0]["center"]]
+        return self._centers[key]
+
     def set_theta(self, theta) -> None:
         mi = self.mi
-        c = [SPHERE_BASE[0], SPHERE_BASE[1] + float(theta[0]), SPHERE_BASE[2] + float(theta[1])]
+        c = self.center(theta)
         if self.key.endswith("center"):
             self.params[self.key] = mi.Point3f(*c)
         else:

@@ -6,10 +6,12 @@
 //! - [`run`]: one optimisation of a task, with its outputs.
 //! - [`report`]: plots, CSV, JSON and markdown tables.
 //! - [`experiments`]: the supplemental's experiments, one page each.
+//! - [`export`]: a task's scene written for another renderer (Mitsuba 3).
 //! - [`cli`]: the command line.
 
 pub mod cli;
 pub mod experiments;
+pub mod export;
 pub mod render;
 pub mod report;
 pub mod run;

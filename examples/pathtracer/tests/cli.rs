@@ -690,3 +690,60 @@ fn the_seeds_page_puts_studies_side_by_side() {
     assert!(!md.contains("## GI"), "tasks without runs have no section");
     let _ = std::fs::remove_dir_all(&runs);
 }
+
+#[test]
+fn export_writes_the_scene_and_refuses_bad_input_before_any_work() {
+    let out = fresh("export");
+    let out_arg = out.display().to_string();
+    for (args, names) in [
+        (
+            vec!["export", "nope", "--out", &out_arg],
+            vec!["nope", "shadow"],
+        ),
+        (
+            vec!["export", "shadow", "--params", "1", "--out", &out_arg],
+            vec!["--params", "2"],
+        ),
+        (
+            vec!["export", "shadow", "--spp", "0", "--out", &out_arg],
+            vec!["--spp", ">= 1"],
+        ),
+        (
+            vec!["export", "shadow", "--scale", "-1", "--out", &out_arg],
+            vec!["--scale", "> 0"],
+        ),
+    ] {
+        let (code, stderr) = run(&args);
+        assert_eq!(code, Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
+        for name in names {
+            assert!(
+                stderr.contains(name),
+                "{args:?}: {name:?} not in {stderr:?}"
+            );
+        }
+        assert!(!out.exists(), "{args:?} wrote {out:?}");
+    }
+    let (code, stderr) = run(&[
+        "export",
+        "cup",
+        "--initial",
+        "--spp",
+        "8",
+        "--out",
+        &out_arg,
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let text = std::fs::read_to_string(out.join("scene.json")).expect("scene.json");
+    let scene: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    assert_eq!(scene["format"], "pathtracer-scene 1");
+    assert_eq!(
+        (scene["task"].as_str(), scene["params"].as_str()),
+        (Some("cup"), Some("start"))
+    );
+    assert_eq!(scene["spp"], 8);
+    assert_eq!(scene["theta"][0], 0.5);
+    let obj = std::fs::read_to_string(out.join("mesh-0.obj")).expect("the mug's mesh");
+    assert_eq!(obj.lines().filter(|l| l.starts_with("f ")).count(), 1280);
+    let _ = std::fs::remove_dir_all(&out);
+}

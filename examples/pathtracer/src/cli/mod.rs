@@ -5,6 +5,7 @@
 
 mod all;
 mod experiment;
+mod export;
 mod landscape;
 mod optimize;
 mod render;
@@ -38,6 +39,9 @@ enum Command {
     /// Render one image at the target (default), the start or given parameters, and print
     /// `render_seconds: X` (the render alone, scene set-up excluded).
     Render(render::Args),
+    /// Write the task's scene at the target (default), the start or given parameters as
+    /// `scene.json` (with its mesh and texture files) for another renderer to read.
+    Export(export::Args),
     /// Every task with the plateau-free gradient and the finite-difference baseline, then
     /// results.md: our numbers beside the paper's.
     All(all::Args),
@@ -210,6 +214,7 @@ fn run_cli(cli: Cli, matches: &ArgMatches) -> Result<()> {
             optimize::run(args, &|id| m.is_some_and(|m| given(m, id)))
         }
         Command::Render(args) => render::run(args),
+        Command::Export(args) => export::run(args),
         Command::All(args) => all::run(args),
         Command::Summarize(args) => summarize::run(args),
         Command::Seeds(args) => seeds::run(args),

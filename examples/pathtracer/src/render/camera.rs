@@ -63,6 +63,21 @@ impl Camera {
         self.origin
     }
 
+    /// Unit view direction.
+    pub fn forward(&self) -> Vec3A {
+        self.forward
+    }
+
+    /// Unit image-up direction (orthogonal to [`Camera::forward`]).
+    pub fn up(&self) -> Vec3A {
+        self.up.normalize()
+    }
+
+    /// Horizontal field of view in degrees.
+    pub fn hfov_degrees(&self) -> f64 {
+        2.0 * (self.right.length() as f64).atan().to_degrees()
+    }
+
     /// Unit direction of the ray through pixel (`x`, `y`) (row 0 at the top) at sub-pixel
     /// offset (`jx`, `jy`) in [0, 1)^2.
     #[inline(always)]

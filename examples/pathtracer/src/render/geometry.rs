@@ -6,7 +6,7 @@
 
 use std::sync::Arc;
 
-use glam::{Mat3A, Vec2, Vec3, Vec3A};
+use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 use obvhs::{
     aabb::Aabb,
     bvh2::{builder::build_bvh2, Bvh2},
@@ -189,6 +189,15 @@ impl OrientedBox {
         slab(lo, ld.recip(), -self.half, self.half, tmax)
     }
 
+    /// The map from the cube [-1, 1]^3 onto the box (scale by the half extents, rotate,
+    /// move to the centre).
+    pub fn to_world(&self) -> Affine3A {
+        Affine3A::from_mat3_translation(
+            (self.rotation * Mat3A::from_diagonal(self.half.into())).into(),
+            self.center.into(),
+        )
+    }
+
     fn normal(&self, p: Vec3A) -> Vec3A {
         let local = self.inverse * (p - self.center);
         self.rotation * box_face_normal(local, self.half)
@@ -256,6 +265,11 @@ impl BoxSet {
             .collect();
         Self { boxes, bvh }
     }
+
+    /// The boxes (in the BVH's order).
+    pub fn boxes(&self) -> &[AaBox] {
+        &self.boxes
+    }
 }
 
 /// Which BVH layout a mesh uses (both from obvhs; the faster is the default, see the bench).
@@ -298,6 +312,11 @@ impl Mesh {
         };
         let tris = order.iter().map(|&i| tris[i as usize]).collect();
         Self { tris, accel }
+    }
+
+    /// The triangles, in the mesh's frame (in the BVH's order).
+    pub fn triangles(&self) -> &[Triangle] {
+        &self.tris
     }
 
     /// Number of triangles.
@@ -356,6 +375,16 @@ impl MeshInstance {
             translation: translation.into(),
             material,
         }
+    }
+
+    /// The placed mesh, in its own frame.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// The rigid motion from the mesh's frame to the world.
+    pub fn to_world(&self) -> Affine3A {
+        Affine3A::from_mat3_translation(self.rotation.into(), self.translation.into())
     }
 }
 

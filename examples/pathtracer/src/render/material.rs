@@ -67,6 +67,21 @@ impl Texture {
         }
     }
 
+    /// Width in texels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in texels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// The texels, row-major from the first row (v = 0), already clamped to [0, 1].
+    pub fn texels(&self) -> &[Vec3A] {
+        &self.texels
+    }
+
     /// Bilinear lookup at `uv` in [0, 1]^2 (texel centres at half-integers).
     #[inline]
     pub fn sample(&self, uv: Vec2) -> Vec3A {

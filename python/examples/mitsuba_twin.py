@@ -1,0 +1,114 @@
+"""A task's Mitsuba twin that moves with theta as the task says (``pathtracer export``).
+
+``Twin(mi, task)`` loads the task's exported scene at its start once; ``set_theta(theta)``
+asks the exporter for the scene at theta (``pathtracer export TASK --params ...``, a few
+milliseconds) and writes what changed into the loaded scene through ``mi.traverse``: a
+sphere's or a quad's ``to_world``, a box's or a mesh's vertices (moved from the start's by
+the change of its ``to_world``), a material's albedo, an emitter's radiance, a point light.
+No scene reload, no second description of how the parameters move the scene.
+
+Tasks of up to 1000 parameters (TEXTURE's 49,152 do not fit a command line).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import tempfile
+from typing import Any
+
+import numpy as np
+
+import mitsuba_export as mx
+
+MAX_PARAMS = 1000
+
+
+def _affine(rows) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, :] = np.asarray(rows, dtype=np.float64)
+    return m
+
+
+def export_at(task: str, theta, spp: int | None = None, scale: float | None = None) -> dict[str, Any]:
+    """The task's description at ``theta`` (the exporter's side files are not kept)."""
+    values = ",".join(repr(float(t)) for t in theta)
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [mx.pathtracer_binary(), "export", task, f"--params={values}", "--out", tmp]
+        if spp is not None:
+            cmd += ["--spp", str(spp)]
+        if scale is not None:
+            cmd += ["--scale", repr(float(scale))]
+        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+        return mx.read_description(tmp)
+
+
+class Twin:
+    """The Mitsuba scene of ``task``, movable: ``render(theta, seed)`` -> linear RGB image."""
+
+    def __init__(self, mi, task: str, spp: int | None = None, scale: float | None = None,
+                 integrator: dict[str, Any] | None = None):
+        self.mi, self.task, self.scale = mi, task, scale
+        with tempfile.TemporaryDirectory() as tmp:
+            desc = mx.run_export(task, tmp, "start", spp=spp, scale=scale)
+            if len(desc.get("theta", [])) == 0 or len(desc["theta"]) > MAX_PARAMS:
+                raise ValueError(f"task {task!r}: more than {MAX_PARAMS} parameters; a twin moves tasks of fewer")
+            self.spp = int(desc["spp"])
+            # optimize=False: Mitsuba would merge meshes sharing a BSDF, and each box must move alone.
+            self.scene = mi.load_dict(mx.scene_dict(mi, desc, self.spp, integrator), optimize=False)
+        self.params = mi.traverse(self.scene)
+        self.desc = desc
+        self.theta = [float(t) for t in desc["theta"]]
+        self._local: dict[str, np.ndarray] = {}
+        for k, s in enumerate(desc["shapes"]):
+            if s["type"] in ("box", "mesh"):
+                key = self._name(k) + ".vertex_positions"
+                world = np.array(self.params[key], dtype=np.float64).reshape(-1, 3)
+                inv = np.linalg.inv(_affine(s["to_world"]))
+                self._local[key] = world @ inv[:3, :3].T + inv[:3, 3]
+
+    def _name(self, k: int) -> str:
+        return f"shape_{k:04d}_{self.desc['shapes'][k]['type']}"
+
+    def _set_shape(self, k: int, s: dict[str, Any]) -> None:
+        mi, name = self.mi, self._name(k)
+        if s["type"] == "sphere":
+            self.params[name + ".to_world"] = mi.Transform4f().translate(s["center"]).scale(s["radius"])
+        elif s["type"] == "quad":
+            self.params[name + ".to_world"] = mi.Transform4f(
+                [list(r) for r in mx.quad_to_world(s["origin"], s["u"], s["v"])] + [[0.0, 0.0, 0.0, 1.0]])
+        else:
+            key = name + ".vertex_positions"
+            m = _affine(s["to_world"])
+            self.params[key] = mi.Float((self._local[key] @ m[:3, :3].T + m[:3, 3]).ravel().astype(np.float32))
+        if "emission" in s:
+            self.params[name + ".emitter.radiance.value"] = mi.Color3f(*s["emission"])
+
+    def set_theta(self, theta) -> None:
+        """Moves the scene to ``theta`` (what the exporter says changed)."""
+        theta = [float(t) for t in theta]
+        if theta == self.theta:
+            return
+        new = export_at(self.task, theta, self.spp, self.scale)
+        old = self.desc
+        for k, (a, b) in enumerate(zip(old["shapes"], new["shapes"])):
+            if {x: y for x, y in a.items() if x != "material"} != {x: y for x, y in b.items() if x != "material"}:
+                self._set_shape(k, b)
+        for m, (a, b) in enumerate(zip(old["materials"], new["materials"])):
+            if a != b and b["type"] == "diffuse":
+                for k, s in enumerate(new["shapes"]):
+                    if s["material"] == m:
+                        self.params[self._name(k) + ".bsdf.brdf_0.reflectance.value"] = self.mi.Color3f(*b["albedo"])
+        for k, (a, b) in enumerate(zip(old["point_lights"], new["point_lights"])):
+            if a != b:
+                self.params[f"point_{k}.position"] = self.mi.Point3f(*b["position"])
+                self.params[f"point_{k}.intensity.value"] = self.mi.Color3f(*b["intensity"])
+        if old["environment"] != new["environment"] and "environment.radiance.value" in self.params:
+            self.params["environment.radiance.value"] = self.mi.Color3f(*new["environment"])
+        self.params.update()
+        self.desc, self.theta = new, theta
+
+    def render(self, theta, seed: int = 0) -> np.ndarray:
+        """The image at ``theta`` with Mitsuba's ``seed``, float64 (height, width, 3)."""
+        self.set_theta(theta)
+        img = self.mi.render(self.scene, seed=int(seed) & 0xFFFFFFFF, spp=self.spp)
+        return np.array(img, dtype=np.float64)
