@@ -5,6 +5,8 @@
 //! cargo run --release --example compare                 # the full run: docs/results/compare.{md,csv}
 //! cargo run --release --example compare -- --quick      # n = 2, 5 and 2 seeds, into target/compare-quick/
 //! cargo run --release --example compare -- --dims 10 --seeds 3 --methods minimize,cmaes --out /tmp/c
+//! cargo run --release --example compare -- --export FILE   # the instances, for the peers
+//! scripts/compare-peers                                     # the page with pycma and NGOpt
 //! ```
 //!
 //! Every method gets the same start point `x0` (uniform in `[-4, 4]^n`) and a budget of
