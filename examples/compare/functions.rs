@@ -163,6 +163,59 @@ impl Problem {
     }
 }
 
+impl Problem {
+    /// The instance as text for `python/benchmarks/peers.py`, which evaluates the same
+    /// functions in numpy: a line `kind n seed`, then one line each of the shift, the rotation
+    /// (row-major), the start, and `checks` lines of a point followed by its value here (the
+    /// harness refuses to run if its values differ). Floats print in Rust's shortest
+    /// round-trip form, so Python reads back the very same bits.
+    pub fn export(&self, seed: u64, checks: &[Vec<f64>]) -> String {
+        let line = |v: &[f64]| {
+            v.iter()
+                .map(|x| format!("{x:e}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        let mut out = format!(
+            "{} {} {seed}\n{}\n{}\n{}\n",
+            self.kind.name(),
+            self.n,
+            line(&self.shift),
+            line(&self.rotation),
+            line(&self.x0)
+        );
+        for x in checks {
+            out.push_str(&format!("{} {:e}\n", line(x), self.eval(x)));
+        }
+        out
+    }
+
+    /// Points at which the export's values are checked: the start, the optimum, a point
+    /// between them, and points off the axes at a few scales (so every branch of the step
+    /// ellipsoid's rounding is crossed).
+    pub fn check_points(&self, seed: u64) -> Vec<Vec<f64>> {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0xC0FFEE);
+        let mut points = vec![
+            self.x0.clone(),
+            self.shift.clone(),
+            self.x0
+                .iter()
+                .zip(&self.shift)
+                .map(|(a, b)| a + 0.37 * (b - a))
+                .collect(),
+        ];
+        for scale in [0.01, 0.3, 3.0] {
+            points.push(
+                self.shift
+                    .iter()
+                    .map(|b| b + scale * rng.random_range(-1.0..1.0))
+                    .collect(),
+            );
+        }
+        points
+    }
+}
+
 /// A random orthogonal matrix: Gram-Schmidt on a Gaussian matrix (row-major).
 fn random_rotation(n: usize, rng: &mut Xoshiro256PlusPlus) -> Vec<f64> {
     let mut m: Vec<f64> = (0..n * n).map(|_| StandardNormal.sample(rng)).collect();

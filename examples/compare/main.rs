@@ -5,6 +5,8 @@
 //! cargo run --release --example compare                 # the full run: docs/results/compare.{md,csv}
 //! cargo run --release --example compare -- --quick      # n = 2, 5 and 2 seeds, into target/compare-quick/
 //! cargo run --release --example compare -- --dims 10 --seeds 3 --methods minimize,cmaes --out /tmp/c
+//! cargo run --release --example compare -- --export FILE   # the instances, for the peers
+//! scripts/compare-peers                                     # the page with pycma and NGOpt
 //! ```
 //!
 //! Every method gets the same start point `x0` (uniform in `[-4, 4]^n`) and a budget of
@@ -13,6 +15,7 @@
 //! optimum. See `docs/results/compare.md` for what each method is given.
 
 mod functions;
+mod peers;
 
 use std::cell::{Cell, RefCell};
 use std::fmt::Write as _;
@@ -226,6 +229,11 @@ struct Args {
     /// (written by an earlier full run), so that a change to one method does not cost the
     /// others' minutes (CMA-ES IPOP alone takes most of the 21).
     rerun: Option<Vec<Method>>,
+    /// Write every instance of the grid to this file (for `python/benchmarks/peers.py`) and
+    /// stop.
+    export: Option<String>,
+    /// The rows of the peers (`python/benchmarks/peers.py`), for their section of the page.
+    peers: Option<String>,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -238,6 +246,8 @@ fn parse_args() -> Result<Args, String> {
         out: "docs/results".into(),
         quick: false,
         rerun: None,
+        export: None,
+        peers: None,
     };
     let mut it = std::env::args().skip(1);
     let mut out_set = false;
@@ -266,13 +276,17 @@ fn parse_args() -> Result<Args, String> {
                     .collect::<Result<_, _>>()?
             }
             "--rerun" => {
+                let v = value()?;
+                // `none`: every row read back (to add the peers' section alone).
                 a.rerun = Some(
-                    value()?
-                        .split(',')
+                    v.split(',')
+                        .filter(|s| *s != "none")
                         .map(|s| Method::parse(s).ok_or(format!("unknown method {s}")))
                         .collect::<Result<_, _>>()?,
                 )
             }
+            "--export" => a.export = Some(value()?),
+            "--peers" => a.peers = Some(value()?),
             "--out" => {
                 a.out = value()?;
                 out_set = true
@@ -281,7 +295,8 @@ fn parse_args() -> Result<Args, String> {
                 return Err(
                     "usage: compare [--quick] [--dims 2,5,10,20,100] [--seeds 5] \
                      [--factor 1000] [--methods minimize,cmaes,cmaes-ipop,random,paper-loop] \
-                     [--functions sphere,...] [--out docs/results] [--rerun minimize]"
+                     [--functions sphere,...] [--out docs/results] [--rerun minimize] \
+                     [--export FILE] [--peers FILE]"
                         .into(),
                 )
             }
@@ -305,6 +320,21 @@ fn main() {
             eprintln!("{e}");
             std::process::exit(2);
         }
+    };
+    if let Some(path) = &args.export {
+        if let Err(e) = export(&args, path) {
+            eprintln!("--export {path}: {e}");
+            std::process::exit(1);
+        }
+        return;
+    }
+    let peer_runs = match args.peers.as_deref().map(peers::read) {
+        Some(Ok(rows)) => Some(rows),
+        Some(Err(e)) => {
+            eprintln!("--peers: {e}");
+            std::process::exit(2);
+        }
+        None => None,
     };
     let mut runs = match &args.rerun {
         Some(rerun) => match kept_runs(&args, rerun) {
@@ -364,10 +394,27 @@ fn main() {
         )
     };
     runs.sort_by_key(order);
-    if let Err(e) = write_outputs(&args, &runs) {
+    if let Err(e) = write_outputs(&args, &runs, peer_runs.as_deref()) {
         eprintln!("writing {}: {e}", args.out);
         std::process::exit(1);
     }
+}
+
+/// Writes every instance of the grid (dimension, function, seed) to `path`.
+fn export(args: &Args, path: &str) -> std::io::Result<()> {
+    let mut text = String::new();
+    for &n in &args.dims {
+        for &kind in &args.kinds {
+            for seed in 0..args.seeds {
+                let problem = Problem::new(kind, n, seed);
+                text.push_str(&problem.export(seed, &problem.check_points(seed)));
+            }
+        }
+    }
+    if let Some(dir) = std::path::Path::new(path).parent() {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::write(path, text)
 }
 
 /// The rows of the methods that `--rerun` leaves out, read from `<out>/compare.csv`: every
@@ -437,7 +484,11 @@ fn fraction<'a>(runs: impl Iterator<Item = &'a Run>) -> (f64, usize) {
     }
 }
 
-fn write_outputs(args: &Args, runs: &[Run]) -> std::io::Result<()> {
+fn write_outputs(
+    args: &Args,
+    runs: &[Run],
+    peer_runs: Option<&[peers::PeerRun]>,
+) -> std::io::Result<()> {
     std::fs::create_dir_all(&args.out)?;
     let mut csv =
         String::from("method,function,group,n,seed,evaluations,best,targets_reached,seconds");
@@ -491,7 +542,14 @@ fn write_outputs(args: &Args, runs: &[Run]) -> std::io::Result<()> {
         cmd.join(" ")
     )
     .unwrap();
-    if let Some(rerun) = &args.rerun {
+    if args.rerun.as_ref().is_some_and(Vec::is_empty) {
+        writeln!(
+            md,
+            "That command ran no method: every row is that of the previous full run \
+             (`cargo run --release --example compare`), read back from `{csv_name}`.\n"
+        )
+        .unwrap();
+    } else if let Some(rerun) = &args.rerun {
         writeln!(
             md,
             "That command ran {} only; the other methods' rows are those of the previous full \
@@ -606,6 +664,20 @@ fn write_outputs(args: &Args, runs: &[Run]) -> std::io::Result<()> {
             }
             md.push('\n');
         }
+    }
+    if let (Some(rows), Some(path)) = (peer_runs, &args.peers) {
+        let ours: Vec<peers::PeerRun> = runs
+            .iter()
+            .filter(|r| r.method == Method::Minimize)
+            .map(|r| peers::PeerRun {
+                method: "minimize".into(),
+                kind: r.kind,
+                n: r.n,
+                seed: r.seed,
+                reached: r.reached(),
+            })
+            .collect();
+        peers::section(&mut md, path, rows, &ours);
     }
     writeln!(md, "\n## Time\n").unwrap();
     header(&mut md, "", methods);

@@ -1,7 +1,8 @@
 //! `seeds`: several seeds studies (directories of runs as `all --seeds K` leaves them) side
 //! by side on one page: per task, each seed's final parameter MSE under each method, how many
-//! reach the paper's, the median and the range, the same for the final image MSE, and the
-//! seconds per iteration.
+//! reach the paper's, the median and the range, the same for the final image MSE, the renders
+//! of the objective at which the parameter MSE first reached the paper's, and the seconds per
+//! iteration.
 
 use std::path::{Path, PathBuf};
 
@@ -34,6 +35,14 @@ pub(super) fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
+/// The directory of seed `k` of `task` in a study.
+fn run_dir(dir: &Path, task: &str, k: usize) -> PathBuf {
+    match k {
+        0 => dir.join(task),
+        k => dir.join(format!("{task}-seed{k}")),
+    }
+}
+
 /// One study's runs of one task: the summary of every seed found, by seed.
 fn study(dir: &Path, task: &str) -> Vec<Option<run::Summary>> {
     let read = |path: PathBuf| -> Option<run::Summary> {
@@ -41,10 +50,7 @@ fn study(dir: &Path, task: &str) -> Vec<Option<run::Summary>> {
         serde_json::from_str(&text).ok()
     };
     let mut seeds: Vec<Option<run::Summary>> = (0..MAX_SEEDS)
-        .map(|k| match k {
-            0 => read(dir.join(task)),
-            k => read(dir.join(format!("{task}-seed{k}"))),
-        })
+        .map(|k| read(run_dir(dir, task, k)))
         .collect();
     while seeds.last().is_some_and(Option::is_none) {
         seeds.pop();
@@ -63,6 +69,27 @@ fn page(dirs: &[PathBuf]) -> String {
     for task in tasks::all() {
         let columns: Vec<Vec<Option<run::Summary>>> =
             dirs.iter().map(|d| study(d, task.name())).collect();
+        // Per column, per seed found: the renders to the paper's parameter MSE (None: never),
+        // or why they cannot be counted.
+        let counts: Vec<Vec<std::result::Result<Option<usize>, String>>> = columns
+            .iter()
+            .zip(dirs)
+            .map(|(c, d)| {
+                (0..c.len())
+                    .filter(|&k| c[k].is_some())
+                    .map(|k| {
+                        let dir = run_dir(d, task.name(), k);
+                        let counted = c[k]
+                            .as_ref()
+                            .map_or(Ok(None), |s| renders_to_paper(&dir, &task, s));
+                        if let Err(why) = &counted {
+                            eprintln!("renders not countable: {why}");
+                        }
+                        counted
+                    })
+                    .collect()
+            })
+            .collect();
         let seeds = columns.iter().map(Vec::len).max().unwrap_or(0);
         if seeds == 0 {
             continue;
@@ -111,6 +138,22 @@ fn page(dirs: &[PathBuf]) -> String {
         rows.push(footer("image MSE median [min, max]", &|c| {
             spread_cell(&images(c))
         }));
+        if task.paper().is_some() {
+            let mut row = vec!["reached the paper's parameter MSE (renders counted)".to_string()];
+            row.extend(counts.iter().map(|c| reached_cell(c)));
+            rows.push(row);
+            let mut row =
+                vec!["renders to the paper's parameter MSE: median [min, max]".to_string()];
+            row.extend(counts.iter().map(|c| renders_cell(c)));
+            rows.push(row);
+        }
+        rows.push(footer("renders of the objective per run (median)", &|c| {
+            let v = finals(c, |s| s.evaluations as f64);
+            if v.is_empty() {
+                return "-".into();
+            }
+            format!("{:.0}", report::spread(&v).0)
+        }));
         rows.push(footer("s/iteration (median)", &|c| {
             let v = finals(c, |s| s.seconds_per_iteration);
             if v.is_empty() {
@@ -126,8 +169,107 @@ fn page(dirs: &[PathBuf]) -> String {
         ));
         md.push_str(&report::markdown_table(&header, &rows));
     }
+    md.push_str("\nRenders to the paper's parameter MSE: the renders of the objective (every evaluation of the loss; not the evaluation-only renders of the image MSE, nor the reference) at the end of the first iteration whose parameter MSE (of the current point in the paper's loop, of the best point so far in the adaptive search and the polish) is at or below the paper's. The median is over every seed run, a run that never reached it counted as never (so the median is \"never\" when fewer than half reached it); the range runs from the fewest renders to the most, \"never\" included. They come from each run's `history.csv` (its `renders` column) or, for runs written before the runs counted, are derived from the run's `checkpoint.json` without rendering: the paper's loop spends the same number of renders every iteration, and the adaptive search is replayed from the checkpoint's values, the replay checked to ask for the very points the run asked for (`pathtracer::run::recount`). A run is \"not countable\" when its history has no renders and neither derivation holds: no checkpoint, or a search that this build does not replay to the same points (the search changed since the run); such runs must be made again to be counted (the command prints why for each).\n");
     md.push_str("\nSeconds per iteration are wall-clock on a shared 2-core machine: an iteration of the adaptive search and of the polish is a generation (several renders), of the paper's loop one estimate (N renders); compare them only within a column.\n");
     md
+}
+
+/// The renders of the objective at which the run in `dir` first reached the paper's parameter
+/// MSE for `task` (`Ok(None)`: never), from its `history.csv`, else derived: for the paper's
+/// loop from its summary ([`run::loop_renders`]), for the adaptive search and the polish from
+/// its checkpoint ([`run::recount`]); why not, if none of these can tell.
+fn renders_to_paper(
+    dir: &Path,
+    task: &tasks::Task,
+    summary: &run::Summary,
+) -> std::result::Result<Option<usize>, String> {
+    let Some(paper) = task.paper().map(|p| p.param_mse) else {
+        return Ok(None);
+    };
+    let history = dir.join("history.csv");
+    let first = |rows: Vec<(f64, usize)>| {
+        rows.iter()
+            .find(|(mse, _)| *mse <= paper)
+            .map(|&(_, renders)| renders)
+    };
+    let (rows, counted) =
+        read_history(&history).ok_or_else(|| format!("{} cannot be read", history.display()))?;
+    if let Some(renders) = counted {
+        return Ok(first(rows.into_iter().zip(renders).collect()));
+    }
+    let why = |e: String| format!("{}: {e}", dir.display());
+    if matches!(
+        summary.method,
+        run::Method::Plateau | run::Method::Fd | run::Method::Spsa
+    ) {
+        let renders =
+            run::loop_renders(rows.len(), summary.evaluations, summary.iterations).map_err(why)?;
+        return Ok(first(rows.into_iter().zip(renders).collect()));
+    }
+    let rows = run::recount(&dir.join(run::checkpoint::FILE)).map_err(|e| why(e.to_string()))?;
+    Ok(run::renders_to(&rows, Some(paper)))
+}
+
+/// The parameter MSE of every row of a `history.csv`, and its renders if it has a `renders`
+/// column; `None` if it cannot be read.
+#[allow(clippy::type_complexity)]
+fn read_history(path: &Path) -> Option<(Vec<f64>, Option<Vec<usize>>)> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next()?.split(',').collect();
+    let at = |name: &str| header.iter().position(|h| *h == name);
+    let (mse, renders) = (at("param_mse")?, at("renders"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let mses = rows
+        .iter()
+        .map(|f| f.get(mse)?.parse().ok())
+        .collect::<Option<Vec<f64>>>()?;
+    let counts = match renders {
+        Some(k) => Some(
+            rows.iter()
+                .map(|f| f.get(k)?.parse().ok())
+                .collect::<Option<Vec<usize>>>()?,
+        ),
+        None => None,
+    };
+    Some((mses, counts))
+}
+
+/// How many runs reached the paper's parameter MSE, "k of n", and how many could not be
+/// counted.
+fn reached_cell(counts: &[std::result::Result<Option<usize>, String>]) -> String {
+    let counted = counts.iter().filter(|c| c.is_ok()).count();
+    let reached = counts.iter().filter(|c| matches!(c, Ok(Some(_)))).count();
+    let uncounted = counts.len() - counted;
+    if counts.is_empty() {
+        "-".into()
+    } else if uncounted > 0 {
+        format!("{reached} of {counted} ({uncounted} not countable)")
+    } else {
+        format!("{reached} of {counted}")
+    }
+}
+
+/// The median and range of the renders to the paper's, a run that never reached it counted as
+/// never (larger than any count).
+fn renders_cell(counts: &[std::result::Result<Option<usize>, String>]) -> String {
+    let mut v: Vec<Option<usize>> = counts.iter().filter_map(|c| c.clone().ok()).collect();
+    if v.is_empty() {
+        return "-".into();
+    }
+    // `None` (never) after every count.
+    v.sort_by_key(|c| c.map_or(usize::MAX, |r| r));
+    let show = |c: Option<usize>| c.map_or("never".to_string(), |r| r.to_string());
+    let mid = v.len() / 2;
+    let median = if v.len() % 2 == 1 {
+        show(v[mid])
+    } else {
+        match (v[mid - 1], v[mid]) {
+            (Some(a), Some(b)) => format!("{}", (a + b) as f64 / 2.0),
+            _ => "never".into(),
+        }
+    };
+    format!("{median} [{}, {}]", show(v[0]), show(v[v.len() - 1]))
 }
 
 /// One number of every run found in a column.

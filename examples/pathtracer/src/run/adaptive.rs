@@ -73,6 +73,7 @@ where
         replay: Vec::new(),
         replay_hash: FNV_START,
         checkpoint_at: Cell::new(None),
+        replayed_rows: Cell::new(0),
     };
     let mut finished = false;
     if let Some(c) = &run.ctl.resume {
@@ -153,6 +154,7 @@ where
     let ended = Ended {
         iterations,
         evaluations,
+        renders: objective.log.borrow().len(),
         stopped_early: false,
         interrupted,
     };
@@ -194,6 +196,8 @@ struct Recording<'a, L> {
     replay_hash: u64,
     /// The iteration count at which the next checkpoint is due.
     checkpoint_at: Cell<Option<usize>>,
+    /// The checkpoint's rows whose render counts the replay has derived.
+    replayed_rows: Cell<usize>,
 }
 
 /// Above this many parameters the best point is not kept per iteration (the progress strip
@@ -208,8 +212,11 @@ impl<L: Fn(&[f64], u64) -> f64> Objective for &Recording<'_, L> {
     }
 
     fn evaluate_batch(&self, points: Points<'_>, seeds: &[u64], out: &mut [f64]) {
+        let before = self.log.borrow().len();
         if self.values(points.iter(), seeds, out) {
             self.record(points, out);
+        } else {
+            self.recount(before, self.log.borrow().len());
         }
     }
 }
@@ -252,6 +259,27 @@ impl<L: Fn(&[f64], u64) -> f64> Recording<'_, L> {
             self.last.set(Instant::now());
         }
         !replaying
+    }
+
+    /// The render counts of the checkpoint's row for the replayed batch of evaluations
+    /// `before..after`, derived as [`Self::record`] counts them (a checkpoint of a build that
+    /// did not count has none; one that did gets the same numbers again).
+    fn recount(&self, before: usize, after: usize) {
+        if before == 0 && after < self.budget {
+            return; // The start alone: no row, as in `record`.
+        }
+        let row = self.replayed_rows.get();
+        let mut history = self.history.borrow_mut();
+        let eval_renders = row.checked_sub(1).map_or(0, |k| history[k].eval_renders);
+        let Some(r) = history.get_mut(row) else {
+            drop(history);
+            stop(Stop::Diverged(
+                "checkpoint: the adaptive search made more iterations than the run it continues (another build?)".into(),
+            ))
+        };
+        r.renders = after;
+        r.eval_renders = eval_renders + usize::from(r.image_mse.is_some());
+        self.replayed_rows.set(row + 1);
     }
 
     /// One row of the history for the batch `points` with values `values`; then the
@@ -311,12 +339,16 @@ impl<L: Fn(&[f64], u64) -> f64> Recording<'_, L> {
         });
         let mut history = self.history.borrow_mut();
         let iteration = history.len();
+        let eval_renders = history.last().map_or(0, |r| r.eval_renders);
         history.push(Row {
             iteration,
             sigma: spread,
             loss: mean_value,
             param_mse: param_mse(&best.1, &self.target),
             image_mse,
+            // Every value logged was rendered once (by this run or the one it continues).
+            renders: self.log.borrow().len(),
+            eval_renders: eval_renders + usize::from(image_mse.is_some()),
             seconds: t.as_secs_f64(),
         });
         if n <= KEEP_BESTS_MAX_DIM {

@@ -13,6 +13,7 @@ mod image;
 pub mod interrupt;
 mod outcome;
 mod outputs;
+mod recount;
 mod settings;
 
 use std::cell::Cell;
@@ -28,7 +29,8 @@ use plateau_free::{
 
 pub use budget::{plan_for_budget, plan_with_render_time};
 pub use checkpoint::{Build, Checkpoint, CheckpointError, Every, Progress};
-pub use outcome::{write_history, Outcome, Row, Summary};
+pub use outcome::{renders_to, write_history, Outcome, Row, Summary};
+pub use recount::{loop_renders, recount};
 pub use settings::{eval_every, Crn, Method, Settings, CURVE_POINTS, MAX_SAMPLES, MAX_SCALE};
 
 use crate::render::Image;
@@ -91,7 +93,15 @@ pub fn optimize_with(task: &Task, s: &Settings, ctl: Control<'_>) -> Result<Outc
 
     let resumed_render = ctl.resume.as_ref().map_or(0.0, |c| c.render_seconds);
     let render_time = Cell::new(Duration::from_secs_f64(resumed_render));
-    let loss = image_loss(task, s, &reference, &render_time);
+    // The paper loop's count of renders goes on from the checkpoint's (the adaptive search
+    // counts its own, replayed values included).
+    let resumed_renders = ctl
+        .resume
+        .as_ref()
+        .and_then(|c| c.history.last())
+        .map_or(0, |r| r.renders);
+    let renders = Cell::new(resumed_renders);
+    let loss = image_loss(task, s, &reference, &render_time, &renders);
     let saver = Saver {
         path: ctl.checkpoint.clone(),
         task: task.name(),
@@ -113,17 +123,29 @@ pub fn optimize_with(task: &Task, s: &Settings, ctl: Control<'_>) -> Result<Outc
         } else if s.method == Method::Image {
             image::run(&run, &render_time)?
         } else {
-            paper_loop(&run, &loss)?
+            paper_loop(&run, &loss, &renders)?
         };
 
     let final_image = task.render(&final_theta, s.seed, s.spp, view);
-    let summary = summarize(
+    let mut summary = summarize(
         task,
         s,
         &ended,
         &final_theta,
         [&reference, &initial, &final_image],
         [optimisation_time, render_time.get()],
+    );
+    // The strip's frames are rendered only when the outputs are written.
+    let strip = if ctl.out.is_some() && snapshots.len() > 1 {
+        snapshots.len()
+    } else {
+        0
+    };
+    count_renders(
+        &mut summary,
+        &history,
+        strip,
+        task.paper().map(|p| p.param_mse),
     );
     let outcome = Outcome { summary, history };
     if let Some(dir) = ctl.out {
@@ -275,14 +297,14 @@ enum Why {
 /// run in segments between checkpoints: each segment continues the library's
 /// [`OptimizerState`] of the one before ([`Optimizer::minimize_from`]), so the segments give
 /// bit for bit the run in one go.
-fn paper_loop<L>(run: &Run<'_>, loss: &L) -> Result<adaptive::Finished>
+fn paper_loop<L>(run: &Run<'_>, loss: &L, renders: &Cell<usize>) -> Result<adaptive::Finished>
 where
     L: Fn(&[f64], u64) -> f64,
 {
     let (task, s, ctl) = (run.task, run.s, run.ctl);
     let mut estimator = estimator(s, loss)?;
     let mut optimizer = optimizer(task, s)?;
-    let mut recorder = Recorder::new(task, s, run.reference, run.start, ctl.progress);
+    let mut recorder = Recorder::new(task, s, run.reference, run.start, ctl.progress, renders);
     let (mut state, mut finished) = match &ctl.resume {
         Some(c) => {
             let Progress::Loop { state } = &c.progress else {
@@ -373,6 +395,7 @@ where
     let ended = Ended {
         iterations: state.iteration,
         evaluations: state.history.evaluations,
+        renders: renders.get(),
         stopped_early: finished && state.iteration < s.iterations,
         interrupted,
     };
@@ -380,12 +403,14 @@ where
 }
 
 /// The objective: the image MSE of a render at `theta` against `reference`, with the seed
-/// [`Crn`] picks; the time spent rendering accumulates in `render_time`.
+/// [`Crn`] picks; the time spent rendering accumulates in `render_time`, the renders are
+/// counted in `renders`.
 fn image_loss<'a>(
     task: &'a Task,
     s: &'a Settings,
     reference: &'a Image,
     render_time: &'a Cell<Duration>,
+    renders: &'a Cell<usize>,
 ) -> impl Fn(&[f64], u64) -> f64 + 'a {
     let view = s.view();
     move |theta: &[f64], pair_seed: u64| {
@@ -396,6 +421,7 @@ fn image_loss<'a>(
         let t = Instant::now();
         let image = task.render(theta, seed, s.spp, view);
         render_time.set(render_time.get() + t.elapsed());
+        renders.set(renders.get() + 1);
         image.mse(reference)
     }
 }
@@ -463,6 +489,8 @@ struct Recorder<'a> {
     checkpoint_at: Option<usize>,
     /// Why the observer last stopped the loop.
     why: Option<Why>,
+    /// The loss's count of its renders.
+    renders: &'a Cell<usize>,
 }
 
 impl<'a> Recorder<'a> {
@@ -472,6 +500,7 @@ impl<'a> Recorder<'a> {
         reference: &'a Image,
         start: &[f64],
         show_progress: bool,
+        renders: &'a Cell<usize>,
     ) -> Self {
         Recorder {
             task,
@@ -490,6 +519,7 @@ impl<'a> Recorder<'a> {
             last: Instant::now(),
             checkpoint_at: None,
             why: None,
+            renders,
         }
     }
 
@@ -525,12 +555,15 @@ impl<'a> Recorder<'a> {
                 .render(step.theta, s.seed, s.spp, s.view())
                 .mse(self.reference)
         });
+        let eval_renders = self.history.last().map_or(0, |r| r.eval_renders);
         self.history.push(Row {
             iteration: step.iteration,
             sigma: step.sigma,
             loss: step.estimate.mean_value,
             param_mse: param_mse(step.theta, &self.target),
             image_mse,
+            renders: self.renders.get(),
+            eval_renders: eval_renders + usize::from(image_mse.is_some()),
             seconds,
         });
         self.bar.set_message(format!(
@@ -593,6 +626,10 @@ fn summarize(
         height: reference.height,
         dim: task.dim(),
         evaluations: run.evaluations,
+        renders: run.renders,
+        renders_to_paper: None,
+        evaluation_renders: 0,
+        reference_renders: 0,
         initial_param_mse: param_mse(&start, &target),
         initial_image_mse: initial.mse(reference),
         param_mse: param_mse(final_theta, &target),
@@ -609,11 +646,23 @@ fn summarize(
     }
 }
 
-/// How a run's loop ended: its iterations, the evaluations of the loss, whether a time
-/// budget stopped it, whether it was interrupted (to be continued).
+/// The render counts of a summary besides the objective's: the paper's parameter MSE first
+/// reached (`paper`), the evaluation-only renders (the history's image MSE, the initial and
+/// the final image, the final image at another seed, `strip` frames), the reference renders
+/// (the target at the run's seed and at another).
+fn count_renders(summary: &mut Summary, history: &[Row], strip: usize, paper: Option<f64>) {
+    summary.renders_to_paper = outcome::renders_to(history, paper);
+    let in_loop = history.last().map_or(0, |r| r.eval_renders);
+    summary.evaluation_renders = in_loop + 3 + strip;
+    summary.reference_renders = 2;
+}
+
+/// How a run's loop ended: its iterations, the evaluations of the loss, the renders of the
+/// objective, whether a time budget stopped it, whether it was interrupted (to be continued).
 struct Ended {
     iterations: usize,
     evaluations: usize,
+    renders: usize,
     stopped_early: bool,
     interrupted: bool,
 }

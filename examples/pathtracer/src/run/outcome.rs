@@ -23,6 +23,15 @@ pub struct Row {
     pub param_mse: f64,
     /// Image MSE of the current parameters (every `eval_every` iterations).
     pub image_mse: Option<f64>,
+    /// Renders of the objective so far, this iteration's included: every evaluation of the
+    /// loss is one render (the evaluation-only renders are not among them). Read as 0 from a
+    /// checkpoint of a build that did not count ([`super::recount`] derives them).
+    #[serde(default)]
+    pub renders: usize,
+    /// Evaluation-only renders so far: one per `image_mse` measured (never seen by the
+    /// optimiser).
+    #[serde(default)]
+    pub eval_renders: usize,
     /// Optimisation time so far (renders for the gradient, estimator, Adam), seconds.
     pub seconds: f64,
 }
@@ -62,6 +71,22 @@ pub struct Summary {
     pub dim: usize,
     /// Evaluations of the objective in all.
     pub evaluations: usize,
+    /// Renders of the objective in all (one per evaluation, the replayed ones of a resumed
+    /// run included): the last row's `renders`.
+    #[serde(default)]
+    pub renders: usize,
+    /// The renders of the objective at which the parameter MSE first reached the paper's
+    /// (main paper Table 2); `None` if it never did or the paper has no number for the task.
+    #[serde(default)]
+    pub renders_to_paper: Option<usize>,
+    /// Evaluation-only renders, never seen by the optimiser: the image MSE of the history's
+    /// rows, the initial and the final image, the final image at another seed, and the
+    /// progress strip's frames.
+    #[serde(default)]
+    pub evaluation_renders: usize,
+    /// Renders of the target: the reference, and the reference at another seed.
+    #[serde(default)]
+    pub reference_renders: usize,
     /// Parameter MSE at the start.
     pub initial_param_mse: f64,
     /// Image MSE at the start.
@@ -113,6 +138,15 @@ impl Outcome {
     }
 }
 
+/// The renders at which `rows` first reach a parameter MSE at or below `paper` (`None`: never,
+/// or no paper number).
+pub fn renders_to(rows: &[Row], paper: Option<f64>) -> Option<usize> {
+    let paper = paper?;
+    rows.iter()
+        .find(|r| r.param_mse <= paper)
+        .map(|r| r.renders)
+}
+
 /// `history.csv`: one row per iteration.
 pub fn write_history(path: &Path, history: &[Row]) -> Result<()> {
     report::write_csv(
@@ -123,6 +157,8 @@ pub fn write_history(path: &Path, history: &[Row]) -> Result<()> {
             "loss",
             "param_mse",
             "image_mse",
+            "renders",
+            "eval_renders",
             "seconds",
         ],
         history.iter().map(|r| {
@@ -132,6 +168,8 @@ pub fn write_history(path: &Path, history: &[Row]) -> Result<()> {
                 format!("{:e}", r.loss),
                 format!("{:e}", r.param_mse),
                 r.image_mse.map_or(String::new(), |v| format!("{v:e}")),
+                r.renders.to_string(),
+                r.eval_renders.to_string(),
                 format!("{:.6}", r.seconds),
             ]
         }),
