@@ -73,6 +73,10 @@ pub(super) fn run(run: &Run<'_>, render_time: &Cell<Duration>) -> Result<Finishe
             loss: mse,
             param_mse: param_mse(method.theta(), &target),
             image_mse: Some(mse),
+            // Every render is the method's own; the image MSE is that of the point just
+            // evaluated, so no render is spent on evaluation alone.
+            renders: method.evaluations(),
+            eval_renders: 0,
             seconds: clock.elapsed().as_secs_f64(),
         });
         if task.dim() <= KEEP_MAX_DIM {
@@ -89,6 +93,7 @@ pub(super) fn run(run: &Run<'_>, render_time: &Cell<Duration>) -> Result<Finishe
     let ended = Ended {
         iterations: history.len(),
         evaluations: best.nfev,
+        renders: best.nfev,
         stopped_early: false,
         interrupted: false,
     };
