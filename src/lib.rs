@@ -152,7 +152,7 @@ pub use run::{
 pub use sampling::Sampling;
 pub use vector::{
     smoothed_jacobian, Acceptance, JacobianEstimate, LeastSquares, LeastSquaresAskTell, Sparsity,
-    VectorAsk, VectorMinimum,
+    VectorMinimum,
 };
 
 /// The README's examples, compiled and run as doctests so that they stay true.

@@ -7,6 +7,7 @@ use super::Sparsity;
 use crate::check;
 use crate::error::Error;
 use crate::objective::Points;
+use crate::run::Ask;
 use crate::seeding::stream_seed;
 use crate::{Annealer, PAPER_SIGMA_MIN};
 
@@ -300,41 +301,6 @@ pub struct VectorMinimum {
     pub nfev: usize,
 }
 
-/// The points of one ask of a [`LeastSquaresAskTell`] and the seed of every point.
-#[derive(Debug, Clone, Copy)]
-pub struct VectorAsk<'a> {
-    points: Points<'a>,
-    seeds: &'a [u64],
-}
-
-impl<'a> VectorAsk<'a> {
-    /// The points, rows of the problem's dimension.
-    pub fn points(&self) -> Points<'a> {
-        self.points
-    }
-
-    /// The seed of every point (both members of a pair share one; every step point gets the
-    /// run's one step seed).
-    pub fn seeds(&self) -> &'a [u64] {
-        self.seeds
-    }
-
-    /// The number of points (output vectors to tell).
-    pub fn len(&self) -> usize {
-        self.seeds.len()
-    }
-
-    /// Whether there are no points (never the case for an ask a run hands out).
-    pub fn is_empty(&self) -> bool {
-        self.seeds.is_empty()
-    }
-
-    /// The points with their seeds, in order.
-    pub fn iter(&self) -> impl ExactSizeIterator<Item = (&'a [f64], u64)> + 'a {
-        self.points.iter().zip(self.seeds.iter().copied())
-    }
-}
-
 /// What the next ask evaluates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Phase {
@@ -423,11 +389,12 @@ impl LeastSquaresAskTell {
         stream_seed(self.opts.seed, u64::MAX, 0)
     }
 
-    /// The next points to evaluate, or `None` once the budget is spent.
+    /// The next points to evaluate, or `None` once the budget is spent. Both members of a
+    /// pair share one seed; every step point (and the start) gets the run's one step seed.
     ///
     /// # Errors
     /// [`Error::AskPending`]: the last points still wait for their outputs.
-    pub fn ask(&mut self) -> Result<Option<VectorAsk<'_>>, Error> {
+    pub fn ask(&mut self) -> Result<Option<Ask<'_>>, Error> {
         if self.pending {
             return Err(Error::AskPending);
         }
@@ -453,10 +420,7 @@ impl LeastSquaresAskTell {
         }
         self.pending = true;
         let n = self.theta.len();
-        Ok(Some(VectorAsk {
-            points: Points::new(&self.points, n),
-            seeds: &self.seeds,
-        }))
+        Ok(Some(Ask::new(Points::new(&self.points, n), &self.seeds)))
     }
 
     /// Draws the pairs of the next Jacobian estimate around theta, at the annealed spread.

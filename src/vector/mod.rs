@@ -28,6 +28,6 @@ mod jacobian;
 mod solve;
 mod sparsity;
 
-pub use gauss_newton::{Acceptance, LeastSquares, LeastSquaresAskTell, VectorAsk, VectorMinimum};
+pub use gauss_newton::{Acceptance, LeastSquares, LeastSquaresAskTell, VectorMinimum};
 pub use jacobian::{smoothed_jacobian, JacobianEstimate};
 pub use sparsity::Sparsity;
