@@ -65,6 +65,39 @@ def _pairs(sparsity: _Sparsity, m: int, n: int) -> Optional[list[tuple[int, int]
     return [(int(i), int(j)) for i, j in a]
 
 
+def _start(
+    x0: npt.ArrayLike, bounds: Optional[Tuple[npt.ArrayLike, npt.ArrayLike]]
+) -> Tuple[_FloatArray, Optional[Tuple[list[float], list[float]]]]:
+    """``x0`` as a finite 1-D float64 array inside the box, and the box as lists (None: none)."""
+    x = np.asarray(x0, dtype=np.float64)
+    if x.ndim != 1 or x.size == 0:
+        raise ValueError(f"x0 must be a non-empty 1-D array, got shape {x.shape}")
+    if not np.isfinite(x).all():
+        raise ValueError(f"x0 = {x!r} is invalid: every coordinate must be finite")
+    if bounds is None:
+        return x, None
+    lower, upper = (np.asarray(b, dtype=np.float64).ravel() for b in bounds)
+    box = (lower.tolist(), upper.tolist())
+    # Lengths that do not match are the Rust side's error, which names them.
+    if len(box[0]) == x.size == len(box[1]):
+        outside = (x < lower) | (x > upper)
+        if outside.any():
+            k = int(np.flatnonzero(outside)[0])
+            raise ValueError(f"x0[{k}] = {x[k]!r} lies outside the bounds [{box[0][k]!r}, {box[1][k]!r}]")
+    return x, box
+
+
+def _counts(**options: object) -> dict[str, int]:
+    """The whole-number options: ``seed`` in [0, 2**64), the others at least 1."""
+    counts = {name: _count(name, v) for name, v in options.items()}
+    for name, value in counts.items():
+        if name != "seed" and value < 1:
+            raise ValueError(f"{name} = {value} is invalid: must be at least 1")
+    if not 0 <= counts["seed"] < 2**64:
+        raise ValueError(f"seed = {counts['seed']} is invalid: must be in [0, 2**64)")
+    return counts
+
+
 def least_squares(
     fun: Callable[[_FloatArray], npt.ArrayLike],
     x0: npt.ArrayLike,
@@ -127,30 +160,12 @@ def least_squares(
     >>> bool(np.abs(res.x - target).max() < 1e-6)
     True
     """
-    x = np.asarray(x0, dtype=np.float64)
-    if x.ndim != 1 or x.size == 0:
-        raise ValueError(f"x0 must be a non-empty 1-D array, got shape {x.shape}")
+    x, box = _start(x0, bounds)
     if acceptance not in ("descent", "always"):
         raise ValueError(f"acceptance = {acceptance!r} is invalid: expected 'descent' or 'always'")
     if not isinstance(smoothed_residuals, (bool, np.bool_)):
         raise ValueError(f"smoothed_residuals = {smoothed_residuals!r} is invalid: must be True or False")
-    counts = {name: _count(name, v) for name, v in (("budget", budget), ("pairs", pairs), ("memory", memory), ("seed", seed))}
-    for name in ("budget", "pairs", "memory"):
-        if counts[name] < 1:
-            raise ValueError(f"{name} = {counts[name]} is invalid: must be at least 1")
-    if not 0 <= counts["seed"] < 2**64:
-        raise ValueError(f"seed = {counts['seed']} is invalid: must be in [0, 2**64)")
-    box = None
-    if bounds is not None:
-        lower, upper = (np.asarray(b, dtype=np.float64).ravel() for b in bounds)
-        box = (lower.tolist(), upper.tolist())
-    if not np.isfinite(x).all():
-        raise ValueError(f"x0 = {x!r} is invalid: every coordinate must be finite")
-    if box is not None:
-        outside = (x < box[0]) | (x > box[1]) if len(box[0]) == x.size == len(box[1]) else None
-        if outside is not None and outside.any():
-            k = int(np.flatnonzero(outside)[0])
-            raise ValueError(f"x0[{k}] = {x[k]!r} lies outside the bounds [{box[0][k]!r}, {box[1][k]!r}]")
+    counts = _counts(budget=budget, pairs=pairs, memory=memory, seed=seed)
     # The start first (as the run would ask it): its outputs give m.
     r0 = _outputs(fun, x, None)
     m = r0.size
