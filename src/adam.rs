@@ -15,11 +15,13 @@ use crate::error::Error;
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Adam {
     lr: f64,
     beta1: f64,
     beta2: f64,
     epsilon: f64,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::float_box"))]
     bounds: Option<(Vec<f64>, Vec<f64>)>,
     m: Vec<f64>,
     v: Vec<f64>,

@@ -36,6 +36,43 @@ use crate::{Minimizer, PaperAskTell};
 /// assert_eq!(told.fun, 0.0);
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
+///
+/// # A run's state is a value
+/// With the `serde` feature, `AskTell` is `Serialize` and `Deserialize`: the whole run (the
+/// options, the method's state, its random generators, the points waiting for values), and
+/// no objective. Saved after any tell, or between an ask and its tell, and read back, it
+/// goes on bit for bit as the uninterrupted run, so an experiment manager can checkpoint
+/// it in its own storage. Non-finite numbers (the best value before the first tell, an
+/// infinite target) are written as `"inf"`, `"-inf"`, `"nan"`, so JSON keeps them.
+///
+/// ```
+/// # #[cfg(feature = "serde")] {
+/// use plateau_free::{AskTell, Minimizer};
+///
+/// let f = |x: &[f64]| x.iter().map(|v| (v.round() - 1.0).powi(2)).sum::<f64>();
+/// let m = Minimizer::without_objective().budget(300).seed(3);
+/// let mut run = m.ask_tell(&[0.0; 3]).unwrap();
+/// for _ in 0..5 {
+///     let ask = run.ask().unwrap().unwrap();
+///     let values: Vec<f64> = ask.iter().map(|(x, _seed)| f(x)).collect();
+///     run.tell(&values).unwrap();
+/// }
+/// let saved = serde_json::to_string(&run).unwrap(); // a checkpoint
+/// drop(run);
+/// let mut run: AskTell = serde_json::from_str(&saved).unwrap();
+/// while let Some(ask) = run.ask().unwrap() {
+///     let values: Vec<f64> = ask.iter().map(|(x, _seed)| f(x)).collect();
+///     run.tell(&values).unwrap();
+/// }
+/// let uninterrupted = Minimizer::new(f).budget(300).seed(3).run(&[0.0; 3]).unwrap();
+/// assert_eq!(run.finish().unwrap(), uninterrupted);
+/// # }
+/// ```
+///
+/// Reading back checks the form (every field, of its type), not the run's invariants: a
+/// state edited by hand (vectors of other lengths than the run's dimension) may panic on a
+/// later ask or tell. Read back only what serialising wrote.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct AskTell {
     /// The options, the budget, the evaluations told and the best point seen.
     ledger: Ledger,
@@ -48,6 +85,7 @@ pub struct AskTell {
     method: Method,
     result: Option<Minimum>,
     /// An error that ends the run (a point that overflowed): every later ask repeats it.
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::failed"))]
     failed: Option<Error>,
 }
 
@@ -64,6 +102,7 @@ impl fmt::Debug for AskTell {
 }
 
 /// The strategy's method, between asks.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 enum Method {
     Adaptive(Box<Adaptive>),
     Polished(Box<Polished>),
@@ -113,6 +152,7 @@ impl Method {
 
 /// Where a run stands with its start, which is evaluated first, alone.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 enum Start {
     /// The next ask is the start.
     ToAsk,

@@ -20,6 +20,7 @@ const POLISH_STREAM: u64 = 0x706f_6c69_7368_0001;
 
 /// [`Strategy::Paper`] between asks: the loop, one evaluation at its last iterate, then the
 /// polish, if any.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Polished {
     /// `None` when the budget allows no iteration.
     run: Option<PaperAskTell>,

@@ -37,6 +37,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 
 /// The strategy parameters for a dimension and population size (Hansen 2016, Table 1).
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Params {
     pub lambda: usize,
     pub mu: usize,
@@ -127,6 +128,7 @@ pub(crate) enum RunEnd {
 }
 
 /// One run: a Gaussian `N(m, sigma^2 C)` and its evolution paths.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct SearchGaussian {
     pub n: usize,
     pub p: Params,

@@ -15,6 +15,7 @@ use crate::run::{Ask, Ledger, Metric, Minimum, Options, Stop, FULL_METRIC_MAX_DI
 use gaussian::{rng, Params, SearchGaussian};
 
 /// The adaptive search between asks: `Minimizer`'s loop over runs and generations, unrolled.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Adaptive {
     rng: Xoshiro256PlusPlus,
     sigma0: f64,
@@ -29,6 +30,7 @@ pub(crate) struct Adaptive {
     /// The asked generation's offsets (repaired onto the bounds), while its values are
     /// awaited.
     asked: Option<Vec<DVector<f64>>>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::floats"))]
     points: Vec<f64>,
     seeds: Vec<u64>,
 }

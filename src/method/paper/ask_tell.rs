@@ -33,7 +33,13 @@ use crate::run::{count, Ask, History, OptimizerState, RunError};
 /// assert_eq!(told, called);
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
+///
+/// With the `serde` feature it is `Serialize` and `Deserialize`, as [`crate::AskTell`] is: saved
+/// after any tell or between an ask and its tell and read back, the run goes on bit for bit
+/// (unlike [`PaperAskTell::state`], which repeats an iteration in progress). Read back only
+/// what was written: the form is checked, not the run's invariants.
 #[derive(Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PaperAskTell {
     optimizer: Optimizer,
     /// The estimator; [`crate::method::polished`] reads the told points from it.

@@ -36,6 +36,7 @@ use crate::GradientEstimator;
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Optimizer {
     adam: Adam,
     annealer: Annealer,
@@ -198,6 +199,7 @@ impl Optimizer {
 /// A run between iterations: the part of [`OptimizerState`] that neither Adam nor the
 /// estimator holds.
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Progress {
     /// Iterations completed.
     pub(crate) iteration: usize,
