@@ -173,3 +173,118 @@ fn the_papers_loop_resumes_bit_for_bit() {
         assert_eq!(run_to(Some(cut)), whole, "cut after {cut} asks");
     }
 }
+
+/// A state whose vectors do not have the run's dimension is refused when read, naming what
+/// is wrong, instead of panicking at a later ask or tell: every array of numbers of a saved
+/// run (every method, mid ask), one number longer or shorter, is refused or runs to its end.
+#[test]
+fn a_state_of_the_wrong_dimension_is_an_error() {
+    use serde_json::Value;
+    let paper = Strategy::Paper {
+        samples: 4,
+        lr: 0.05,
+        sigma0: 0.5,
+    };
+    for (m, k) in [
+        (Minimizer::without_objective().budget(100).seed(1), 3),
+        (
+            Minimizer::without_objective()
+                .budget(100)
+                .seed(1)
+                .strategy(paper),
+            3,
+        ),
+        (
+            Minimizer::without_objective()
+                .budget(100)
+                .seed(1)
+                .strategy(paper)
+                .polish(0.5),
+            16,
+        ),
+    ] {
+        let mut run = m.ask_tell(&[0.5, 0.5]).unwrap();
+        for _ in 0..k {
+            let ask = run.ask().unwrap().unwrap();
+            let values: Vec<f64> = ask.points().iter().map(f).collect();
+            run.tell(&values).unwrap();
+        }
+        // Mid ask: the asked points are saved too.
+        let ask = run.ask().unwrap().unwrap();
+        let pending: Vec<f64> = ask.points().iter().map(f).collect();
+        let json = serde_json::to_value(&run).unwrap();
+        assert!(serde_json::from_value::<AskTell>(json.clone()).is_ok());
+        // Every array of numbers, one at a time, one number longer and one shorter.
+        let mut paths = Vec::new();
+        number_arrays(&json, &mut Vec::new(), &mut paths);
+        assert!(paths.len() > 5, "{paths:?}");
+        let mut panics = Vec::new();
+        for (path, longer) in paths.iter().flat_map(|p| [(p, true), (p, false)]) {
+            let mut bad = json.clone();
+            let mut at = &mut bad;
+            for key in path {
+                at = match key {
+                    Key::Field(f) => &mut at[f.as_str()],
+                    Key::Index(i) => &mut at[*i],
+                };
+            }
+            let Value::Array(items) = at else {
+                unreachable!()
+            };
+            if longer {
+                items.push(Value::from(0.25));
+            } else {
+                items.pop();
+            }
+            // Either refused, or a state that runs to its end without a panic (arrays that
+            // are scratch space or records, whose length the run does not depend on).
+            let Ok(mut back) = serde_json::from_value::<AskTell>(bad) else {
+                continue;
+            };
+            let runs = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                let _ = back.tell(&pending);
+                while let Ok(Some(ask)) = back.ask() {
+                    let values: Vec<f64> = ask.points().iter().map(f).collect();
+                    if back.tell(&values).is_err() {
+                        break;
+                    }
+                }
+            }));
+            if runs.is_err() {
+                panics.push((path, longer));
+            }
+        }
+        assert!(panics.is_empty(), "a changed array panics: {panics:?}");
+    }
+}
+
+#[derive(Debug, Clone)]
+enum Key {
+    Field(String),
+    Index(usize),
+}
+
+/// The paths of every array whose items are all numbers.
+fn number_arrays(v: &serde_json::Value, path: &mut Vec<Key>, out: &mut Vec<Vec<Key>>) {
+    use serde_json::Value;
+    match v {
+        Value::Array(items) if !items.is_empty() && items.iter().all(Value::is_number) => {
+            out.push(path.clone());
+        }
+        Value::Array(items) => {
+            for (i, item) in items.iter().enumerate() {
+                path.push(Key::Index(i));
+                number_arrays(item, path, out);
+                path.pop();
+            }
+        }
+        Value::Object(map) => {
+            for (k, item) in map {
+                path.push(Key::Field(k.clone()));
+                number_arrays(item, path, out);
+                path.pop();
+            }
+        }
+        _ => {}
+    }
+}

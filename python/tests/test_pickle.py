@@ -5,6 +5,7 @@ for every method."""
 from __future__ import annotations
 
 import copy
+import json
 import pickle
 from typing import Any, Callable, Optional
 
@@ -104,3 +105,15 @@ def test_not_a_state_is_a_value_error() -> None:
     raw = plateau_free.ask_tell([0.0], budget=10)._raw
     with pytest.raises(ValueError, match="not a saved ask-and-tell run"):
         type(raw)._from_state("{}")
+
+
+def test_a_state_of_the_wrong_dimension_is_a_value_error() -> None:
+    """An edited state whose start has another length than the run's points: refused when
+    read, naming the vector, not a crash at a later ask."""
+    es = plateau_free.ask_tell([0.0, 0.0], budget=50, seed=2)
+    X, _ = es.ask()
+    es.tell([stairs(x) for x in X])
+    state = json.loads(es._raw._state())
+    state["run"]["Adaptive"]["x0"].append(0.5)
+    with pytest.raises(ValueError, match="x0 has length 3, expected 2"):
+        type(es._raw)._from_state(json.dumps(state))

@@ -212,6 +212,16 @@ pub(crate) struct Pending {
 }
 
 impl Pending {
+    /// A read-back estimate in progress against theta's dimension `n`.
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, n: usize) -> Result<(), Error> {
+        crate::check::len("pending estimate's dimension", self.n, n)?;
+        if !self.first.is_empty() {
+            crate::check::len("pending estimate's first draw", self.first.len(), n)?;
+        }
+        Ok(())
+    }
+
     /// Whether the attempt's draws are still there to finish (a failed finish may leave
     /// them, a finished estimate has used them).
     pub(crate) fn is_drawn(&self) -> bool {

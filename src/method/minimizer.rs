@@ -8,6 +8,8 @@ use std::fmt;
 
 use super::adaptive::Adaptive;
 use super::polished::Polished;
+#[cfg(feature = "serde")]
+use crate::check;
 use crate::error::Error;
 use crate::objective::Points;
 use crate::run::{Ask, Best, Ledger, Minimum, Options, Stop, Strategy};
@@ -69,10 +71,15 @@ use crate::{Minimizer, PaperAskTell};
 /// # }
 /// ```
 ///
-/// Reading back checks the form (every field, of its type), not the run's invariants: a
-/// state edited by hand (vectors of other lengths than the run's dimension) may panic on a
-/// later ask or tell. Read back only what serialising wrote.
+/// Reading back checks the form (every field, of its type), the options as
+/// [`Minimizer::ask_tell`] does, and the lengths of the run's vectors (the adaptive search's
+/// and its Gaussian's, the paper loop's theta, Adam's moments, the estimator's buffers of an
+/// estimate in progress) against the run's dimension: a state that fails is an error of the
+/// deserialiser naming the [`Error`], not a panic later (`tests/state_value.rs` lengthens
+/// and shortens every array of a saved run). The values themselves are the state's: read
+/// back what serialising wrote.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "Unchecked"))]
 pub struct AskTell {
     /// The options, the budget, the evaluations told and the best point seen.
     ledger: Ledger,
@@ -162,7 +169,63 @@ enum Start {
     Told,
 }
 
+/// [`AskTell`]'s fields as read, before [`AskTell::check`].
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct Unchecked {
+    ledger: Ledger,
+    n: usize,
+    x0: Vec<f64>,
+    x0_seed: [u64; 1],
+    start: Start,
+    method: Method,
+    result: Option<Minimum>,
+    #[serde(with = "crate::saved::failed")]
+    failed: Option<Error>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<Unchecked> for AskTell {
+    type Error = Error;
+
+    fn try_from(u: Unchecked) -> Result<AskTell, Error> {
+        let run = AskTell {
+            ledger: u.ledger,
+            n: u.n,
+            x0: u.x0,
+            x0_seed: u.x0_seed,
+            start: u.start,
+            method: u.method,
+            result: u.result,
+            failed: u.failed,
+        };
+        run.check()?;
+        Ok(run)
+    }
+}
+
 impl AskTell {
+    /// The invariants that a read-back state must keep for its asks and tells not to
+    /// panic: the options valid for the start, and every vector of the run's dimension.
+    #[cfg(feature = "serde")]
+    fn check(&self) -> Result<(), Error> {
+        let n = self.n;
+        check::len("x0", self.x0.len(), n)?;
+        let budget = self.ledger.options.check(&self.x0)?;
+        if budget != self.ledger.budget {
+            return Err(Error::InvalidParameter {
+                name: "budget",
+                value: self.ledger.budget.into(),
+                reason: "must be the options' budget",
+            });
+        }
+        check::len("best point", self.ledger.best.x.len(), n)?;
+        match &self.method {
+            Method::Adaptive(a) => a.check(n),
+            Method::Polished(p) => p.check(n),
+        }
+    }
+
     pub(crate) fn new(options: Options, x0: &[f64]) -> Result<AskTell, Error> {
         let budget = options.check(x0)?;
         let method = match options.strategy {

@@ -76,6 +76,19 @@ impl Polished {
         })
     }
 
+    /// A read-back run's vectors against the run's dimension `n`.
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, n: usize) -> Result<(), Error> {
+        crate::check::len("final point", self.last_point.len(), n)?;
+        if let Some(run) = &self.run {
+            run.check(n)?;
+        }
+        match &self.polish {
+            Some(polish) => polish.check(n),
+            None => Ok(()),
+        }
+    }
+
     /// The spread of the first iteration.
     pub(crate) fn start_sigma(&self) -> f64 {
         match &self.run {

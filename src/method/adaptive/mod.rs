@@ -84,6 +84,35 @@ impl Adaptive {
         self
     }
 
+    /// A read-back search's vectors against the run's dimension `n` (see
+    /// `crate::AskTell`'s deserialisation).
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, n: usize) -> Result<(), Error> {
+        use crate::check::len;
+        len("adaptive start", self.start.len(), n)?;
+        len("adaptive scales", self.scales.len(), n)?;
+        // A failed ask leaves its points beside the last generation's seeds: whole rows.
+        let whole = self.points.len() - self.points.len() % n;
+        len("adaptive points", self.points.len(), whole)?;
+        if let Some(dist) = &self.dist {
+            dist.check(n)?;
+        }
+        if let Some(ys) = &self.asked {
+            let Some(dist) = &self.dist else {
+                return len("adaptive search asked without a distribution", 0, 1);
+            };
+            len("adaptive asked offsets", ys.len(), self.seeds.len())?;
+            len("adaptive asked points", self.points.len(), ys.len() * n)?;
+            if ys.len() > dist.p.lambda {
+                len("adaptive asked offsets", ys.len(), dist.p.lambda)?;
+            }
+            for y in ys {
+                len("adaptive asked offset", y.len(), n)?;
+            }
+        }
+        Ok(())
+    }
+
     /// The spread of the first generation.
     pub(crate) fn start_sigma(&self) -> f64 {
         self.sigma0

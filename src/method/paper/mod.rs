@@ -150,6 +150,12 @@ impl Optimizer {
         Ok((progress, stream_position))
     }
 
+    /// A read-back optimiser against theta's dimension `n` (Adam's moments and box).
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, n: usize) -> Result<(), crate::error::Error> {
+        self.adam.check_dim(n)
+    }
+
     /// The spread of the next iteration, or `None` when the run is complete.
     pub(crate) fn next_sigma(&self, progress: &Progress) -> Option<f64> {
         (progress.iteration < self.iterations).then(|| self.annealer.sigma(progress.iteration))
