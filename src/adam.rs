@@ -15,11 +15,13 @@ use crate::error::Error;
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Adam {
     lr: f64,
     beta1: f64,
     beta2: f64,
     epsilon: f64,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::float_box"))]
     bounds: Option<(Vec<f64>, Vec<f64>)>,
     m: Vec<f64>,
     v: Vec<f64>,
@@ -27,6 +29,25 @@ pub struct Adam {
 }
 
 impl Adam {
+    /// A read-back optimiser against theta's dimension `n`: its box, and its moments (empty
+    /// before the first step, else of length `n`).
+    #[cfg(feature = "serde")]
+    pub(crate) fn check_dim(&self, n: usize) -> Result<(), Error> {
+        if let Some((lower, upper)) = &self.bounds {
+            check::len("lower bounds", lower.len(), n)?;
+            check::len("upper bounds", upper.len(), n)?;
+            check::bounds(lower, upper)?;
+        }
+        // A failed first step leaves zero moments of length `n` at `t = 0`.
+        let moments = if self.t == 0 && self.m.is_empty() {
+            0
+        } else {
+            n
+        };
+        check::len("Adam's first moment", self.m.len(), moments)?;
+        check::len("Adam's second moment", self.v.len(), moments)
+    }
+
     /// Adam with learning rate `lr` and the usual defaults: beta1 0.9, beta2 0.999, epsilon
     /// 1e-8.
     ///

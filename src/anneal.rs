@@ -121,6 +121,7 @@ impl FromStr for Schedule {
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Annealer {
     sigma0: f64,
     sigma_min: f64,

@@ -68,7 +68,8 @@
 //! [`Sampling`] and [`Schedule`] print and parse under one spelling each (`radial`,
 //! `per-coordinate`, `gaussian`; `constant`, `warm-linear:0.5`, `exponential`, `cosine`).
 //! The optional feature `serde` derives `Serialize` and `Deserialize` for them (under the
-//! same names) and for [`Estimate`] and [`History`].
+//! same names) and for [`Estimate`] and [`History`], and makes a run's whole state a value:
+//! [`AskTell`] and [`PaperAskTell`], saved at any tell and read back, go on bit for bit.
 //!
 //! ## Example
 //! A tilted step `1[x + 2y > 0.3]` started on its flat side, where every plain gradient is
@@ -133,6 +134,8 @@ mod objective;
 mod optimize;
 mod run;
 mod sampling;
+#[cfg(feature = "serde")]
+mod saved;
 pub mod seeding;
 pub mod vector;
 

@@ -244,6 +244,7 @@ const GAUSSIAN_SCALES: Scales = Scales {
 
 /// How a compact draw (see [`Sampling::draw_raw`]) expands into its offset and weight.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Scales {
     /// `z_i = offset * raw_i`.
     pub(crate) offset: f64,

@@ -25,6 +25,11 @@ class AskTell:
     render farm). With the options and seed of a :func:`minimize` call, the run and its
     :attr:`result` are bit for bit that call's.
 
+    A run's state is a value: it pickles (and ``copy.deepcopy`` copies it) after any
+    :meth:`tell` or between an :meth:`ask` and its :meth:`tell`, and the copy goes on bit for
+    bit as the uninterrupted run, so that an experiment manager can checkpoint it in its own
+    storage.
+
     Examples
     --------
     >>> import numpy as np, plateau_free

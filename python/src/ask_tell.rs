@@ -19,12 +19,14 @@ pub(crate) struct PyAskTell {
     shape: Vec<usize>,
 }
 
+#[derive(serde::Serialize, serde::Deserialize)]
 enum Run {
     Adaptive(Box<RsAskTell>),
     Paper(Box<Paper>),
 }
 
 /// The paper's loop, its per-iteration records and its final evaluation.
+#[derive(serde::Serialize, serde::Deserialize)]
 struct Paper {
     run: PaperAskTell,
     seed: u64,
@@ -102,8 +104,52 @@ impl Paper {
     }
 }
 
+/// What pickling keeps: the run (the library's serde state) and the shape of `x0`.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Saved {
+    run: Run,
+    shape: Vec<usize>,
+}
+
 #[pymethods]
 impl PyAskTell {
+    /// The run as a JSON string (the library's serde state, no objective): pickled, and read
+    /// back by `_from_state`, it goes on bit for bit.
+    fn _state(&self, py: Python<'_>) -> PyResult<String> {
+        let run = self.run.lock(py)?;
+        // `Saved` owns its run: serialise a borrowed view of the same fields instead.
+        #[derive(serde::Serialize)]
+        struct View<'a> {
+            run: &'a Run,
+            shape: &'a [usize],
+        }
+        serde_json::to_string(&View {
+            run: &run,
+            shape: &self.shape,
+        })
+        .map_err(|e| PyValueError::new_err(format!("cannot save the run: {e}")))
+    }
+
+    /// The run that `_state` wrote.
+    #[staticmethod]
+    fn _from_state(state: &str) -> PyResult<Self> {
+        let saved: Saved = serde_json::from_str(state)
+            .map_err(|e| PyValueError::new_err(format!("not a saved ask-and-tell run: {e}")))?;
+        Ok(PyAskTell {
+            run: Guarded::new(saved.run),
+            shape: saved.shape,
+        })
+    }
+
+    /// Pickling (and `copy.deepcopy`): `_from_state(_state())`.
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let from_state = slf.get_type().getattr("_from_state")?;
+        Ok((from_state, (slf.get()._state(py)?,)))
+    }
+
     /// The adaptive search (`plateau_free.minimize`'s default method) from `x0`.
     #[staticmethod]
     fn adaptive(py: Python<'_>, x0: &Bound<'_, PyAny>, options: AdaptiveOptions) -> PyResult<Self> {

@@ -51,6 +51,28 @@ impl Core {
         }
     }
 
+    /// A read-back estimator against theta's dimension `n`: its configuration and box, and,
+    /// with an estimate `pending` (between [`Core::start`] and [`Core::finish`]), the sizes
+    /// that `start` gave its buffers (without one, the next `start` sizes them).
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, n: usize, pending: bool) -> Result<(), Error> {
+        self.validate()?;
+        if let Some(b) = &self.bounds {
+            b.check_dim(n)?;
+        }
+        if !pending {
+            return Ok(());
+        }
+        let (b, draws, samples) = (&self.buffers, self.settings.draws(), self.settings.samples);
+        check::len("estimator draws", b.raw.len(), (draws - 1) * n)?;
+        check::len("estimator weights", b.weights.len(), draws * n)?;
+        check::len("estimator scales", b.scales.len(), draws)?;
+        check::len("estimator points", b.points.len(), samples * n)?;
+        check::len("estimator seeds", b.seeds.len(), samples)?;
+        check::len("estimator values", b.values.len(), samples)?;
+        check::len("estimator differences", b.diffs.len(), draws)
+    }
+
     /// The box every evaluated point is clamped onto.
     pub(crate) fn bounds(&self) -> Option<&Bounds> {
         self.bounds.as_ref()

@@ -148,8 +148,11 @@ pub trait GradientEstimator {
 
 /// A box `[lower[i], upper[i]]` that the estimators keep their points in.
 #[derive(Debug, Clone, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Bounds {
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::floats"))]
     pub(crate) lower: Vec<f64>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::floats"))]
     pub(crate) upper: Vec<f64>,
 }
 
@@ -183,6 +186,7 @@ type Panic = Box<dyn Any + Send>;
 /// and their seeds), the values written by whoever evaluates them, and [`Core::finish`]: the
 /// callback form ([`PlateauFreeGradient::estimate`]) and the ask-and-tell form
 /// ([`crate::PaperAskTell`]) are the same calls in the same order.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Core {
     settings: Settings,
     /// The box every evaluated point is clamped onto, if any.
@@ -193,6 +197,7 @@ pub(crate) struct Core {
 
 /// An estimate between [`Core::start`] and [`Core::finish`].
 #[derive(Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Pending {
     /// The estimate's index (its random streams).
     pub(crate) index: u64,
@@ -207,6 +212,16 @@ pub(crate) struct Pending {
 }
 
 impl Pending {
+    /// A read-back estimate in progress against theta's dimension `n`.
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, n: usize) -> Result<(), Error> {
+        crate::check::len("pending estimate's dimension", self.n, n)?;
+        if !self.first.is_empty() {
+            crate::check::len("pending estimate's first draw", self.first.len(), n)?;
+        }
+        Ok(())
+    }
+
     /// Whether the attempt's draws are still there to finish (a failed finish may leave
     /// them, a finished estimate has used them).
     pub(crate) fn is_drawn(&self) -> bool {
@@ -216,6 +231,7 @@ impl Pending {
 
 /// The configuration that the builder methods set.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 struct Settings {
     samples: usize,
     sampling: Sampling,
@@ -263,6 +279,7 @@ impl Settings {
 /// Scratch space reused across estimates so that the hot path does not allocate (except the
 /// gradient it returns).
 #[derive(Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 struct Buffers {
     /// Draws 1, 2, ... in compact form, rows of length `n` (see `Sampling::draw_raw`); draw
     /// 0 is held by the gradient's vector until the gradient overwrites it.
@@ -273,9 +290,12 @@ struct Buffers {
     weights: Vec<f64>,
     /// How each row of `raw` expands into an offset and a weight.
     scales: Vec<Scales>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::floats"))]
     points: Vec<f64>,
     seeds: Vec<u64>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::floats"))]
     values: Vec<f64>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::floats"))]
     diffs: Vec<f64>,
     /// `(n, c_n)` of the last estimate: two log-gammas per estimate are a noticeable share
     /// of the cost when `n` is small.

@@ -8,6 +8,8 @@ use std::fmt;
 
 use super::adaptive::Adaptive;
 use super::polished::Polished;
+#[cfg(feature = "serde")]
+use crate::check;
 use crate::error::Error;
 use crate::objective::Points;
 use crate::run::{Ask, Best, Ledger, Minimum, Options, Stop, Strategy};
@@ -36,6 +38,48 @@ use crate::{Minimizer, PaperAskTell};
 /// assert_eq!(told.fun, 0.0);
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
+///
+/// # A run's state is a value
+/// With the `serde` feature, `AskTell` is `Serialize` and `Deserialize`: the whole run (the
+/// options, the method's state, its random generators, the points waiting for values), and
+/// no objective. Saved after any tell, or between an ask and its tell, and read back, it
+/// goes on bit for bit as the uninterrupted run, so an experiment manager can checkpoint
+/// it in its own storage. Non-finite numbers (the best value before the first tell, an
+/// infinite target) are written as `"inf"`, `"-inf"`, `"nan"`, so JSON keeps them.
+///
+/// ```
+/// # #[cfg(feature = "serde")] {
+/// use plateau_free::{AskTell, Minimizer};
+///
+/// let f = |x: &[f64]| x.iter().map(|v| (v.round() - 1.0).powi(2)).sum::<f64>();
+/// let m = Minimizer::without_objective().budget(300).seed(3);
+/// let mut run = m.ask_tell(&[0.0; 3]).unwrap();
+/// for _ in 0..5 {
+///     let ask = run.ask().unwrap().unwrap();
+///     let values: Vec<f64> = ask.iter().map(|(x, _seed)| f(x)).collect();
+///     run.tell(&values).unwrap();
+/// }
+/// let saved = serde_json::to_string(&run).unwrap(); // a checkpoint
+/// drop(run);
+/// let mut run: AskTell = serde_json::from_str(&saved).unwrap();
+/// while let Some(ask) = run.ask().unwrap() {
+///     let values: Vec<f64> = ask.iter().map(|(x, _seed)| f(x)).collect();
+///     run.tell(&values).unwrap();
+/// }
+/// let uninterrupted = Minimizer::new(f).budget(300).seed(3).run(&[0.0; 3]).unwrap();
+/// assert_eq!(run.finish().unwrap(), uninterrupted);
+/// # }
+/// ```
+///
+/// Reading back checks the form (every field, of its type), the options as
+/// [`Minimizer::ask_tell`] does, and the lengths of the run's vectors (the adaptive search's
+/// and its Gaussian's, the paper loop's theta, Adam's moments, the estimator's buffers of an
+/// estimate in progress) against the run's dimension: a state that fails is an error of the
+/// deserialiser naming the [`Error`], not a panic later (`tests/state_value.rs` lengthens
+/// and shortens every array of a saved run). The values themselves are the state's: read
+/// back what serialising wrote.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "Unchecked"))]
 pub struct AskTell {
     /// The options, the budget, the evaluations told and the best point seen.
     ledger: Ledger,
@@ -48,6 +92,7 @@ pub struct AskTell {
     method: Method,
     result: Option<Minimum>,
     /// An error that ends the run (a point that overflowed): every later ask repeats it.
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::failed"))]
     failed: Option<Error>,
 }
 
@@ -64,6 +109,7 @@ impl fmt::Debug for AskTell {
 }
 
 /// The strategy's method, between asks.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 enum Method {
     Adaptive(Box<Adaptive>),
     Polished(Box<Polished>),
@@ -113,6 +159,7 @@ impl Method {
 
 /// Where a run stands with its start, which is evaluated first, alone.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 enum Start {
     /// The next ask is the start.
     ToAsk,
@@ -122,7 +169,63 @@ enum Start {
     Told,
 }
 
+/// [`AskTell`]'s fields as read, before [`AskTell::check`].
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct Unchecked {
+    ledger: Ledger,
+    n: usize,
+    x0: Vec<f64>,
+    x0_seed: [u64; 1],
+    start: Start,
+    method: Method,
+    result: Option<Minimum>,
+    #[serde(with = "crate::saved::failed")]
+    failed: Option<Error>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<Unchecked> for AskTell {
+    type Error = Error;
+
+    fn try_from(u: Unchecked) -> Result<AskTell, Error> {
+        let run = AskTell {
+            ledger: u.ledger,
+            n: u.n,
+            x0: u.x0,
+            x0_seed: u.x0_seed,
+            start: u.start,
+            method: u.method,
+            result: u.result,
+            failed: u.failed,
+        };
+        run.check()?;
+        Ok(run)
+    }
+}
+
 impl AskTell {
+    /// The invariants that a read-back state must keep for its asks and tells not to
+    /// panic: the options valid for the start, and every vector of the run's dimension.
+    #[cfg(feature = "serde")]
+    fn check(&self) -> Result<(), Error> {
+        let n = self.n;
+        check::len("x0", self.x0.len(), n)?;
+        let budget = self.ledger.options.check(&self.x0)?;
+        if budget != self.ledger.budget {
+            return Err(Error::InvalidParameter {
+                name: "budget",
+                value: self.ledger.budget.into(),
+                reason: "must be the options' budget",
+            });
+        }
+        check::len("best point", self.ledger.best.x.len(), n)?;
+        match &self.method {
+            Method::Adaptive(a) => a.check(n),
+            Method::Polished(p) => p.check(n),
+        }
+    }
+
     pub(crate) fn new(options: Options, x0: &[f64]) -> Result<AskTell, Error> {
         let budget = options.check(x0)?;
         let method = match options.strategy {

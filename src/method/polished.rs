@@ -20,6 +20,7 @@ const POLISH_STREAM: u64 = 0x706f_6c69_7368_0001;
 
 /// [`Strategy::Paper`] between asks: the loop, one evaluation at its last iterate, then the
 /// polish, if any.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Polished {
     /// `None` when the budget allows no iteration.
     run: Option<PaperAskTell>,
@@ -73,6 +74,19 @@ impl Polished {
             final_asked: false,
             polish: None,
         })
+    }
+
+    /// A read-back run's vectors against the run's dimension `n`.
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, n: usize) -> Result<(), Error> {
+        crate::check::len("final point", self.last_point.len(), n)?;
+        if let Some(run) = &self.run {
+            run.check(n)?;
+        }
+        match &self.polish {
+            Some(polish) => polish.check(n),
+            None => Ok(()),
+        }
     }
 
     /// The spread of the first iteration.

@@ -91,6 +91,7 @@ impl History {
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum HistoryKeep {
     /// Every iteration: the record grows with the run (16 bytes an iteration, 160 MB for
     /// `10^7` iterations).

@@ -14,6 +14,7 @@ use crate::Minimizer;
 
 /// Why a run of [`Minimizer`] ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Stop {
     /// The budget of evaluations is spent.
     Budget,
@@ -35,6 +36,7 @@ impl fmt::Display for Stop {
 
 /// The result of a [`Minimizer`] run.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Minimum {
     /// The best point seen. The start is evaluated first, so `f(x) <= f(x0)` always.
     pub x: Vec<f64>,
@@ -55,8 +57,10 @@ pub struct Minimum {
 
 /// The best point seen and its value.
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Best {
     pub(crate) x: Vec<f64>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::float"))]
     pub(crate) fun: f64,
 }
 
@@ -83,6 +87,7 @@ impl Best {
 /// A [`Minimizer`] run's account, kept the same way by every method: its options and budget,
 /// the evaluations spent and the best point seen.
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Ledger {
     pub(crate) options: Options,
     pub(crate) budget: usize,

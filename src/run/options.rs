@@ -10,6 +10,7 @@ use crate::Minimizer;
 
 /// The search method of a [`Minimizer`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Strategy {
     /// The default: a Gaussian search distribution with adaptive spread and metric, flat-step
     /// growth of the spread on plateaus, and restarts from the best point with a doubled
@@ -34,6 +35,7 @@ pub enum Strategy {
 
 /// The metric (covariance) the search distribution learns.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Metric {
     /// Full up to `n = 200`, diagonal above (the default).
     #[default]
@@ -53,11 +55,14 @@ pub const FULL_METRIC_MAX_DIM: usize = 200;
 /// A [`Minimizer`]'s options: everything but the objective, which is all an ask-and-tell
 /// run needs.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Options {
     pub(crate) budget: Option<usize>,
     pub(crate) seed: u64,
     pub(crate) sigma0: Option<f64>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::float_box"))]
     pub(crate) bounds: Option<(Vec<f64>, Vec<f64>)>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::float_option"))]
     pub(crate) target: Option<f64>,
     pub(crate) population: Option<usize>,
     pub(crate) restarts: bool,

@@ -37,6 +37,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 
 /// The strategy parameters for a dimension and population size (Hansen 2016, Table 1).
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Params {
     pub lambda: usize,
     pub mu: usize,
@@ -127,6 +128,7 @@ pub(crate) enum RunEnd {
 }
 
 /// One run: a Gaussian `N(m, sigma^2 C)` and its evolution paths.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct SearchGaussian {
     pub n: usize,
     pub p: Params,
@@ -161,6 +163,37 @@ pub(crate) struct Generation {
 }
 
 impl SearchGaussian {
+    /// A read-back distribution's sizes against the dimension `n`.
+    #[cfg(feature = "serde")]
+    pub fn check(&self, n: usize) -> Result<(), crate::error::Error> {
+        use crate::check::len;
+        len("search dimension", self.n, n)?;
+        for (what, v) in [
+            ("search mean", &self.mean),
+            ("search scales", &self.d),
+            ("search path ps", &self.ps),
+            ("search path pc", &self.pc),
+        ] {
+            len(what, v.len(), n)?;
+        }
+        if let Some((cov, b)) = &self.full {
+            len("search covariance", cov.nrows() * cov.ncols(), n * n)?;
+            len("search eigenvectors", b.nrows() * b.ncols(), n * n)?;
+            len("search covariance rows", cov.nrows(), n)?;
+            len("search eigenvector rows", b.nrows(), n)?;
+        }
+        let p = &self.p;
+        len("search weights", p.weights.len(), p.lambda)?;
+        if p.lambda < 2 || p.mu == 0 || p.mu > p.lambda {
+            return Err(crate::error::Error::InvalidParameter {
+                name: "population",
+                value: p.lambda.into(),
+                reason: "must be at least 2, with 1 <= mu <= population",
+            });
+        }
+        Ok(())
+    }
+
     /// A run at `mean` with spread `sigma` and a covariance `diag(scales^2)` to start with,
     /// full (learns any metric) or diagonal (learns per-coordinate scales only, `O(n)` per
     /// sample: separable CMA-ES, Ros and Hansen, PPSN 2008, with its faster rates capped by

@@ -15,6 +15,7 @@ use crate::run::{Ask, Ledger, Metric, Minimum, Options, Stop, FULL_METRIC_MAX_DI
 use gaussian::{rng, Params, SearchGaussian};
 
 /// The adaptive search between asks: `Minimizer`'s loop over runs and generations, unrolled.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Adaptive {
     rng: Xoshiro256PlusPlus,
     sigma0: f64,
@@ -29,6 +30,7 @@ pub(crate) struct Adaptive {
     /// The asked generation's offsets (repaired onto the bounds), while its values are
     /// awaited.
     asked: Option<Vec<DVector<f64>>>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::floats"))]
     points: Vec<f64>,
     seeds: Vec<u64>,
 }
@@ -80,6 +82,35 @@ impl Adaptive {
     pub(crate) fn counting_from(mut self, iterations: usize) -> Adaptive {
         self.iterations = iterations;
         self
+    }
+
+    /// A read-back search's vectors against the run's dimension `n` (see
+    /// `crate::AskTell`'s deserialisation).
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, n: usize) -> Result<(), Error> {
+        use crate::check::len;
+        len("adaptive start", self.start.len(), n)?;
+        len("adaptive scales", self.scales.len(), n)?;
+        // A failed ask leaves its points beside the last generation's seeds: whole rows.
+        let whole = self.points.len() - self.points.len() % n;
+        len("adaptive points", self.points.len(), whole)?;
+        if let Some(dist) = &self.dist {
+            dist.check(n)?;
+        }
+        if let Some(ys) = &self.asked {
+            let Some(dist) = &self.dist else {
+                return len("adaptive search asked without a distribution", 0, 1);
+            };
+            len("adaptive asked offsets", ys.len(), self.seeds.len())?;
+            len("adaptive asked points", self.points.len(), ys.len() * n)?;
+            if ys.len() > dist.p.lambda {
+                len("adaptive asked offsets", ys.len(), dist.p.lambda)?;
+            }
+            for y in ys {
+                len("adaptive asked offset", y.len(), n)?;
+            }
+        }
+        Ok(())
     }
 
     /// The spread of the first generation.

@@ -33,7 +33,14 @@ use crate::run::{count, Ask, History, OptimizerState, RunError};
 /// assert_eq!(told, called);
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
+///
+/// With the `serde` feature it is `Serialize` and `Deserialize`, as [`crate::AskTell`] is: saved
+/// after any tell or between an ask and its tell and read back, the run goes on bit for bit
+/// (unlike [`PaperAskTell::state`], which repeats an iteration in progress). Reading back
+/// checks the lengths of its vectors against theta's, as [`crate::AskTell`]'s does.
 #[derive(Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "Unchecked"))]
 pub struct PaperAskTell {
     optimizer: Optimizer,
     /// The estimator; [`crate::method::polished`] reads the told points from it.
@@ -45,6 +52,36 @@ pub struct PaperAskTell {
     asked: bool,
     /// The estimate of the last completed iteration.
     last: Option<Estimate>,
+}
+
+/// [`PaperAskTell`]'s fields as read, before [`PaperAskTell::check`] of theta's dimension.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct Unchecked {
+    optimizer: Optimizer,
+    core: Core,
+    progress: Progress,
+    current: Option<(f64, Pending)>,
+    asked: bool,
+    last: Option<Estimate>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<Unchecked> for PaperAskTell {
+    type Error = Error;
+
+    fn try_from(u: Unchecked) -> Result<PaperAskTell, Error> {
+        let run = PaperAskTell {
+            optimizer: u.optimizer,
+            core: u.core,
+            progress: u.progress,
+            current: u.current,
+            asked: u.asked,
+            last: u.last,
+        };
+        run.check(run.progress.theta.len())?;
+        Ok(run)
+    }
 }
 
 impl Optimizer {
@@ -104,6 +141,23 @@ impl Optimizer {
 }
 
 impl PaperAskTell {
+    /// A read-back loop's parameters against the dimension `n`: theta (finite), Adam's
+    /// moments and box, the estimator's box.
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, n: usize) -> Result<(), Error> {
+        check::len("theta", self.progress.theta.len(), n)?;
+        check::theta(&self.progress.theta)?;
+        for theta in &self.progress.history.theta {
+            check::len("history's theta", theta.len(), n)?;
+        }
+        if let Some((sigma, pending)) = &self.current {
+            check::sigma(*sigma)?;
+            pending.check(n)?;
+        }
+        self.optimizer.check(n)?;
+        self.core.check(n, self.current.is_some())
+    }
+
     /// The points of the next gradient estimate (`N` rows of theta's dimension) and their
     /// seeds (both members of an antithetic pair share one), or `None` once every iteration
     /// is done. After a [`PaperAskTell::tell`] whose values called for a redraw

@@ -36,6 +36,7 @@ use crate::GradientEstimator;
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Optimizer {
     adam: Adam,
     annealer: Annealer,
@@ -149,6 +150,12 @@ impl Optimizer {
         Ok((progress, stream_position))
     }
 
+    /// A read-back optimiser against theta's dimension `n` (Adam's moments and box).
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, n: usize) -> Result<(), crate::error::Error> {
+        self.adam.check_dim(n)
+    }
+
     /// The spread of the next iteration, or `None` when the run is complete.
     pub(crate) fn next_sigma(&self, progress: &Progress) -> Option<f64> {
         (progress.iteration < self.iterations).then(|| self.annealer.sigma(progress.iteration))
@@ -198,6 +205,7 @@ impl Optimizer {
 /// A run between iterations: the part of [`OptimizerState`] that neither Adam nor the
 /// estimator holds.
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct Progress {
     /// Iterations completed.
     pub(crate) iteration: usize,
