@@ -35,9 +35,15 @@ import numpy as np
 import mitsuba_scene as ms  # imports no mitsuba itself
 from mitsuba_files import write_csv
 
-REFLECTANCE = "wall.bsdf.reflectance.value"
 RHO_START = (0.7, 0.7, 0.7)
 PAPER_PARAM_MSE = 1.81e-3
+
+
+def wall_reflectance(params) -> str:
+    """The key of the wall's reflectance among the scene's parameters: the export names shapes
+    by their index and kind (SHADOW has one quad, the wall)."""
+    (key,) = [k for k in params.keys() if "_quad." in k and k.endswith("reflectance.value")]
+    return key
 
 
 def parse(argv: list[str] | None = None) -> argparse.Namespace:
@@ -73,7 +79,8 @@ def main(argv: list[str] | None = None) -> dict:
     scene = ms.ShadowScene(mi, spp=args.spp, scale=args.scale,
                            integrator={"type": "prb", "max_depth": ms.MAX_DEPTH})
     params, seed = scene.params, args.seed
-    params[REFLECTANCE] = mi.Color3f(*args.rho_target)
+    reflectance = wall_reflectance(params)
+    params[reflectance] = mi.Color3f(*args.rho_target)
     reference = mi.TensorXf(scene.render(ms.TARGET, seed))
 
     op = PlateauFreeOp(lambda x, _pair_seed: scene.render(x, seed), restore=scene.set_theta,
@@ -87,7 +94,7 @@ def main(argv: list[str] | None = None) -> dict:
         theta = np.array(opt["theta"], dtype=np.float64)
         rho = np.array(opt["rho"], dtype=np.float64).ravel()
         scene.set_theta(theta)
-        params[REFLECTANCE] = opt["rho"]
+        params[reflectance] = opt["rho"]
         params.update()
         image = op(opt["theta"], mi.render(scene.scene, params, seed=seed, spp=args.spp),
                    annealer.sigma(it))
@@ -121,7 +128,7 @@ def rho_error(rho, target) -> float:
 def finish(mi, args, scene, reference, opt, rows, op, seconds) -> dict:
     theta = np.array(opt["theta"], dtype=np.float64)
     rho = np.array(opt["rho"], dtype=np.float64).ravel()
-    scene.params[REFLECTANCE] = mi.Color3f(*(float(v) for v in rho))
+    scene.params[wall_reflectance(scene.params)] = mi.Color3f(*(float(v) for v in rho))
     final = scene.render(theta, args.seed)
     summary = {
         "seed": args.seed, "iterations": args.iterations, "samples": args.samples,
