@@ -3,7 +3,8 @@
 
 use std::path::PathBuf;
 
-use super::{find_task, usage, values};
+use super::point::Point;
+use super::values;
 use crate::export::{self, Header};
 use crate::render::Settings;
 use crate::report::Result;
@@ -12,19 +13,8 @@ use crate::tasks::View;
 /// The options of `export`.
 #[derive(clap::Args)]
 pub(super) struct Args {
-    /// The task: cup, shadow, occlusion, gi, sort, caustic or texture.
-    #[arg(value_parser = values::task)]
-    task: String,
-    /// Export the start parameters' scene.
-    #[arg(long, conflicts_with_all = ["target", "params"])]
-    initial: bool,
-    /// Export the target parameters' scene (the default).
-    #[arg(long, conflicts_with = "params")]
-    target: bool,
-    /// Export the scene at these parameters, comma-separated (as many as the task has)
-    /// [default: the target's, or with --initial the start's].
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_parser = values::finite)]
-    params: Option<Vec<f64>>,
+    #[command(flatten)]
+    point: Point,
     /// Samples per pixel the description asks for [default: the task's, supplemental Table 1].
     #[arg(long, allow_negative_numbers = true, value_parser = values::at_least(1u32))]
     spp: Option<u32>,
@@ -38,20 +28,7 @@ pub(super) struct Args {
 
 /// Writes the description and prints the path of `scene.json`.
 pub(super) fn run(args: Args) -> Result<()> {
-    let task = find_task(&args.task)?;
-    let (theta, which) = match args.params {
-        Some(p) => (p, "given"),
-        None if args.initial => (task.start(), "start"),
-        None => (task.target(), "target"),
-    };
-    if theta.len() != task.dim() {
-        return Err(usage(format!(
-            "--params: {} values; allowed: {} ({}'s parameter count)",
-            theta.len(),
-            task.dim(),
-            task.name()
-        )));
-    }
+    let (task, theta, which) = args.point.resolve()?;
     let view = View {
         scale: args.scale,
         ..View::default()

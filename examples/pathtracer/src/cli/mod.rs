@@ -8,6 +8,7 @@ mod experiment;
 mod export;
 mod landscape;
 mod optimize;
+mod point;
 mod render;
 mod seeds;
 mod summarize;

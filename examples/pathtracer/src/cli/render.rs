@@ -2,26 +2,16 @@
 
 use std::path::PathBuf;
 
-use super::{find_task, usage, values, with_threads, RenderOptions};
+use super::point::Point;
+use super::{values, with_threads, RenderOptions};
 use crate::render;
 use crate::report::Result;
 
 /// The options of `render`.
 #[derive(clap::Args)]
 pub(super) struct Args {
-    /// The task: cup, shadow, occlusion, gi, sort, caustic or texture.
-    #[arg(value_parser = values::task)]
-    task: String,
-    /// Render at the start parameters.
-    #[arg(long, conflicts_with_all = ["target", "params"])]
-    initial: bool,
-    /// Render at the target parameters (the default).
-    #[arg(long, conflicts_with = "params")]
-    target: bool,
-    /// Render at these parameters, comma-separated (as many as the task has) [default: the
-    /// target's, or with --initial the start's].
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_parser = values::finite)]
-    params: Option<Vec<f64>>,
+    #[command(flatten)]
+    point: Point,
     #[command(flatten)]
     render: RenderOptions,
     /// Render this many times and print the median time (the image is the last one).
@@ -35,20 +25,7 @@ pub(super) struct Args {
 /// Renders, prints `render_seconds: X` (the median render alone, scene set-up excluded) and
 /// writes the image.
 pub(super) fn run(args: Args) -> Result<()> {
-    let task = find_task(&args.task)?;
-    let theta = match args.params {
-        Some(p) => p,
-        None if args.initial => task.start(),
-        None => task.target(),
-    };
-    if theta.len() != task.dim() {
-        return Err(usage(format!(
-            "--params: {} values; allowed: {} ({}'s parameter count)",
-            theta.len(),
-            task.dim(),
-            task.name()
-        )));
-    }
+    let (task, theta, _) = args.point.resolve()?;
     let o = &args.render;
     with_threads(o.threads, || {
         let spp = o.spp.unwrap_or(task.defaults().spp);
