@@ -6,6 +6,7 @@
 
 use std::sync::Arc;
 
+use super::lanes::QuadLanes;
 use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 use obvhs::{
     aabb::Aabb,
@@ -20,7 +21,7 @@ use obvhs::{
 pub const NO_LIGHT: u32 = u32::MAX;
 
 /// Hits closer than this are self-intersections (origins are also offset along the normal).
-const T_MIN: f32 = 1e-6;
+pub(crate) const T_MIN: f32 = 1e-6;
 
 /// A sphere.
 #[derive(Clone, Copy, Debug)]
@@ -149,6 +150,21 @@ impl Quad {
         } else {
             f32::INFINITY
         }
+    }
+
+    /// `normal . origin`: the plane is `normal . p = plane_d`.
+    pub(crate) fn plane_d(&self) -> f32 {
+        self.plane_d
+    }
+
+    /// Dotted with the in-plane offset from `origin`, gives the `a` coordinate.
+    pub(crate) fn a_axis(&self) -> Vec3A {
+        self.a_axis
+    }
+
+    /// Dotted with the in-plane offset from `origin`, gives the `b` coordinate.
+    pub(crate) fn b_axis(&self) -> Vec3A {
+        self.b_axis
     }
 
     #[inline(always)]
@@ -497,6 +513,19 @@ impl Geometry {
     /// Closest surface along the unit-direction ray `o + t d`, `t` in (0, `tmax`).
     #[inline]
     pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, Surface)> {
+        self.intersect_in(None, o, d, tmax)
+    }
+
+    /// [`Geometry::intersect`] with the quads tested four at a time from `lanes`
+    /// (`QuadLanes::pack(&self.quads)`) when given: the same answer, bit for bit.
+    #[inline]
+    pub(crate) fn intersect_in(
+        &self,
+        lanes: Option<&[QuadLanes]>,
+        o: Vec3A,
+        d: Vec3A,
+        tmax: f32,
+    ) -> Option<(f32, Surface)> {
         let mut best = tmax;
         let mut prim = None;
         for (i, s) in self.spheres.iter().enumerate() {
@@ -506,11 +535,26 @@ impl Geometry {
                 prim = Some(Prim::Sphere(i as u32));
             }
         }
-        for (i, q) in self.quads.iter().enumerate() {
-            let t = q.intersect(o, d, best);
-            if t < best {
-                best = t;
-                prim = Some(Prim::Quad(i as u32));
+        match lanes {
+            Some(lanes) => {
+                for (g, group) in lanes.iter().enumerate() {
+                    // Lane order is quad order: the lowest index wins a tie, as below.
+                    for (k, t) in group.intersect(o, d, best).into_iter().enumerate() {
+                        if t < best {
+                            best = t;
+                            prim = Some(Prim::Quad((4 * g + k) as u32));
+                        }
+                    }
+                }
+            }
+            None => {
+                for (i, q) in self.quads.iter().enumerate() {
+                    let t = q.intersect(o, d, best);
+                    if t < best {
+                        best = t;
+                        prim = Some(Prim::Quad(i as u32));
+                    }
+                }
             }
         }
         for (i, b) in self.boxes.iter().enumerate() {
@@ -593,8 +637,26 @@ impl Geometry {
     /// Whether any surface lies on the ray `o + t d` for `t` in (0, `tmax`) (shadow rays).
     #[inline]
     pub fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
-        if self.spheres.iter().any(|s| s.intersect(o, d, tmax) < tmax)
-            || self.quads.iter().any(|q| q.intersect(o, d, tmax) < tmax)
+        self.occluded_in(None, o, d, tmax)
+    }
+
+    /// [`Geometry::occluded`] with the quads tested four at a time from `lanes` when given.
+    #[inline]
+    pub(crate) fn occluded_in(
+        &self,
+        lanes: Option<&[QuadLanes]>,
+        o: Vec3A,
+        d: Vec3A,
+        tmax: f32,
+    ) -> bool {
+        let quad_hit = match lanes {
+            Some(lanes) => lanes
+                .iter()
+                .any(|g| g.intersect(o, d, tmax).iter().any(|&t| t < tmax)),
+            None => self.quads.iter().any(|q| q.intersect(o, d, tmax) < tmax),
+        };
+        if quad_hit
+            || self.spheres.iter().any(|s| s.intersect(o, d, tmax) < tmax)
             || self.boxes.iter().any(|b| b.intersect(o, d, tmax) < tmax)
         {
             return true;
@@ -668,6 +730,58 @@ mod tests {
             hits += usize::from(want.is_finite());
         }
         assert!(hits > 1_000, "{hits}");
+    }
+
+    #[test]
+    fn quads_in_lanes_answer_as_one_by_one() {
+        // Nine quads (two full groups and one lane of a third) in a room, some overlapping, one
+        // degenerate-thin, and a sphere in front of some of them.
+        let mut quads = Vec::new();
+        for k in 0..9 {
+            let f = k as f32;
+            quads.push(Quad::new(
+                Vec3::new(-2.0 + 0.3 * f, -1.0, -3.0 + 0.5 * f),
+                Vec3::new(2.5, 0.2 * f, 0.1),
+                Vec3::new(0.1 * f, 2.0, if k == 4 { 1e-3 } else { 0.7 }),
+                k,
+            ));
+        }
+        let geo = Geometry {
+            quads,
+            spheres: vec![Sphere::new(Vec3::new(0.5, 0.0, -1.0), 0.6, 20)],
+            ..Default::default()
+        };
+        let lanes = QuadLanes::pack(&geo.quads);
+        let mut rng = crate::render::rng::Sampler::new(4, 5, 6);
+        let mut hits = [0usize; 10];
+        for _ in 0..50_000 {
+            let (a, b) = rng.next_2d();
+            let (c, e) = rng.next_2d();
+            let o = Vec3A::new(6.0 * a - 3.0, 4.0 * b - 2.0, 3.0 + 2.0 * c);
+            let d = (Vec3A::new(4.0 * e - 2.0, 3.0 * a - 1.5, -3.0) - o).normalize();
+            let tmax = if c < 0.5 {
+                f32::INFINITY
+            } else {
+                3.0 + 4.0 * b
+            };
+            let one = geo.intersect(o, d, tmax);
+            let four = geo.intersect_in(Some(&lanes), o, d, tmax);
+            match (one, four) {
+                (None, None) => {}
+                (Some((t1, s1)), Some((t4, s4))) => {
+                    assert_eq!(t1.to_bits(), t4.to_bits());
+                    assert_eq!((s1.material, s1.n, s1.uv), (s4.material, s4.n, s4.uv));
+                    hits[s1.material.min(9) as usize] += 1;
+                }
+                _ => panic!("{o} {d}: {one:?} vs {four:?}"),
+            }
+            assert_eq!(
+                geo.occluded(o, d, tmax),
+                geo.occluded_in(Some(&lanes), o, d, tmax)
+            );
+        }
+        // Every quad is hit by some rays, so every lane was exercised.
+        assert!(hits[..9].iter().all(|&h| h > 0), "{hits:?}");
     }
 
     #[test]
