@@ -133,7 +133,8 @@ impl Quad {
         // is then <= 0 or NaN, which the range test below rejects too (a product that
         // underflows to 0 needs |num| < 1e-33, so t < 1e-21 < T_MIN: also a miss). Same
         // answers, fewer divisions: about half of a room's walls are behind any ray.
-        if !(num * denom > 0.0) {
+        let in_front = num * denom > 0.0;
+        if !in_front {
             return f32::INFINITY;
         }
         let t = num / denom;

@@ -47,8 +47,11 @@ pub fn render(scene: &Scene, settings: &Settings) -> Image {
     let spp = settings.spp.max(1);
     let mut image = Image::new(width, height);
     let origin = camera.origin();
-    let lanes = QuadLanes::pack(&scene.geometry.quads);
-    let lanes = Some(lanes.as_slice());
+    // Packing pays from a full group of four on: with one quad (SHADOW, SORT, TEXTURE) the
+    // padded lanes made those renders 10-25 % slower. Either way the bits are the same.
+    let quads = &scene.geometry.quads;
+    let lanes = (quads.len() >= 4).then(|| QuadLanes::pack(quads));
+    let lanes = lanes.as_deref();
     image
         .data
         .par_chunks_mut(3 * width as usize)
