@@ -1,4 +1,5 @@
-//! Renderer benchmarks: per-task render time at the task's default settings, BVH build
+//! Renderer benchmarks: per-task render time at the task's default settings, the parts of a
+//! render per task on one thread (camera rays, primary hits, the whole image), BVH build
 //! times, Bvh2 vs CwBvh traversal on the CUP mug, and 1 vs 2 rayon threads on SHADOW.
 
 use std::hint::black_box;
@@ -23,6 +24,71 @@ fn task_renders(c: &mut Criterion) {
         let spp = task.defaults().spp;
         group.bench_function(task.name(), |b| {
             b.iter(|| black_box(task.render(&theta, 1, spp, tasks::View::default())))
+        });
+    }
+    group.finish();
+}
+
+/// Every camera sample's stream and ray (what the render loop does before tracing), summed so
+/// that nothing is optimised away.
+fn camera_rays(scene: &render::Scene, spp: u32) -> Vec3A {
+    let cam = &scene.camera;
+    let mut sum = Vec3A::ZERO;
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            for s in 0..spp {
+                let mut rng = Sampler::new(0, y * cam.width + x, s);
+                let (jx, jy) = rng.next_2d();
+                sum += cam.direction(x, y, jx, jy);
+            }
+        }
+    }
+    sum
+}
+
+/// The camera rays and their closest hits (the first segment of every path, unshaded).
+fn primary_hits(scene: &render::Scene, spp: u32) -> usize {
+    let cam = &scene.camera;
+    let mut hits = 0;
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            for s in 0..spp {
+                let mut rng = Sampler::new(0, y * cam.width + x, s);
+                let (jx, jy) = rng.next_2d();
+                let d = cam.direction(x, y, jx, jy);
+                let hit = scene.geometry.intersect(cam.origin(), d, f32::INFINITY);
+                hits += usize::from(hit.is_some());
+            }
+        }
+    }
+    hits
+}
+
+/// Where a render's time goes, per task, on one thread: the camera rays alone, with their
+/// closest hits, and the whole render (the rest is shading, shadow rays and later bounces).
+/// `cargo bench -p pathtracer --bench render -- render_parts`.
+fn render_parts(c: &mut Criterion) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool");
+    let mut group = c.benchmark_group("render_parts");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2));
+    for task in tasks::all() {
+        let scene = task.scene(&task.target(), tasks::View::default());
+        let spp = task.defaults().spp;
+        let settings = render::Settings::new(spp, 0, task.max_depth());
+        group.bench_function(format!("{}/camera_rays", task.name()), |b| {
+            b.iter(|| black_box(camera_rays(&scene, spp)))
+        });
+        group.bench_function(format!("{}/primary_hits", task.name()), |b| {
+            b.iter(|| black_box(primary_hits(&scene, spp)))
+        });
+        group.bench_function(format!("{}/render", task.name()), |b| {
+            b.iter(|| pool.install(|| black_box(render::render(&scene, &settings))))
         });
     }
     group.finish();
@@ -123,5 +189,12 @@ fn threads(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, task_renders, bvh_builds, traversal, threads);
+criterion_group!(
+    benches,
+    task_renders,
+    render_parts,
+    bvh_builds,
+    traversal,
+    threads
+);
 criterion_main!(benches);

@@ -7,6 +7,7 @@ pub mod camera;
 pub mod film;
 pub mod geometry;
 pub mod integrator;
+mod lanes;
 pub mod light;
 pub mod material;
 pub mod rng;
