@@ -9,7 +9,9 @@
 //! - `film`: `width`, `height`; a box pixel filter (uniform jitter inside the pixel);
 //! - `camera`: `origin`, unit `forward` and `up` (image right = forward x up), `hfov_degrees`;
 //! - `spp`, `max_depth` (path segments, Mitsuba's convention), `task`, `params` (`start`,
-//!   `target` or `given`) and `theta` (for tasks of up to [`THETA_INLINE`] parameters);
+//!   `target` or `given`) and `theta` (for tasks of up to [`THETA_INLINE`] parameters; a
+//!   larger task's are in the side file `theta_file`, `theta.json`, a JSON array that
+//!   `--params-file` reads back);
 //! - `materials`: `{"type": "diffuse", "albedo": [r, g, b]}` (two-sided Lambertian), with
 //!   `"texture": k` when textured, or `{"type": "dielectric", "ior": x}` (IOR inside, the
 //!   shape's normal pointing out);
@@ -36,8 +38,8 @@ use crate::tasks::Defaults;
 /// The format's name and version, the first key of `scene.json`.
 pub const FORMAT: &str = "pathtracer-scene 1";
 
-/// Tasks with at most this many parameters list them in `scene.json` (TEXTURE's 49,152
-/// are in its texture).
+/// Tasks with at most this many parameters list them in `scene.json`; a larger task's
+/// (TEXTURE's 49,152) go to the side file `theta.json`.
 pub const THETA_INLINE: usize = 1000;
 
 /// What `scene.json` says besides the scene: the task, which parameters, the render settings.
@@ -72,7 +74,7 @@ pub fn write(dir: &Path, header: &Header, scene: &Scene) -> std::io::Result<()> 
 
 /// A side file of the description: an OBJ mesh, or a texture as an image.
 pub enum File {
-    /// Text (an OBJ mesh).
+    /// Text (an OBJ mesh, the parameters as JSON).
     Text(String),
     /// A texture's texels as a linear image.
     Texture(Image),
@@ -118,6 +120,10 @@ pub fn describe(header: &Header, scene: &Scene, files: &mut Vec<(String, File)>)
     });
     if header.theta.len() <= THETA_INLINE {
         value["theta"] = json!(header.theta);
+    } else {
+        let name = "theta.json".to_string();
+        files.push((name.clone(), File::Text(json!(header.theta).to_string())));
+        value["theta_file"] = json!(name);
     }
     if let Some((d, unit_box)) = header.defaults {
         value["defaults"] = json!({
@@ -207,7 +213,8 @@ mod tests {
     use crate::tasks::{self, View};
 
     /// Every task describes itself: the camera's frame and field of view come back, every
-    /// shape names a material that exists, and the side files are the ones named.
+    /// shape names a material that exists, and the side files are the ones named (theta's
+    /// too, for TEXTURE).
     #[test]
     fn every_task_describes_its_scene() {
         for task in tasks::all() {
@@ -244,10 +251,12 @@ mod tests {
                         .iter()
                         .filter_map(|t| t["file"].as_str()),
                 )
+                .chain(v["theta_file"].as_str())
                 .collect();
             let written: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
             assert_eq!(named, written, "{}", task.name());
             assert_eq!(v.get("theta").is_some(), task.dim() <= THETA_INLINE);
+            assert_eq!(v.get("theta_file").is_some(), task.dim() > THETA_INLINE);
             assert_eq!(v["defaults"]["samples"], task.defaults().samples);
             assert_eq!(v["defaults"]["unit_box"], task.bounds().is_some());
         }
