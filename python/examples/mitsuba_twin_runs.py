@@ -58,7 +58,22 @@ def target_theta(task: str, scale: float | None) -> np.ndarray:
         return np.array(mx.theta_of(mx.run_export(task, tmp, "target", scale=scale)), dtype=np.float64)
 
 
-def one_run(mi, task: str, seed: int, scale: float, budget_scale: float, out: Path) -> dict[str, Any]:
+METHODS = ("polished", "adaptive", "plateau")
+
+
+def method_options(method: str, d: dict[str, Any], budget: int) -> dict[str, Any]:
+    """``minimize``'s options for ``method`` from the task's Table 1 row ``d``: polished and the
+    paper's loop take its sigma0, learning rate and samples; the adaptive search its sigma0."""
+    if method not in METHODS:
+        raise ValueError(f"method: {method!r}; allowed: {', '.join(METHODS)}")
+    options: dict[str, Any] = {"method": method, "sigma0": float(d["sigma0"]), "budget": budget}
+    if method != "adaptive":
+        options.update(lr=float(d["lr"]), samples=int(d["samples"]))
+    return options
+
+
+def one_run(mi, task: str, seed: int, scale: float, budget_scale: float, out: Path,
+            method: str = "polished") -> dict[str, Any]:
     import plateau_free
 
     import mitsuba_twin as mt
@@ -82,16 +97,15 @@ def one_run(mi, task: str, seed: int, scale: float, budget_scale: float, out: Pa
             renders += 1
         return np.array(out)
 
-    result = plateau_free.minimize(fun, start, method="polished", sigma0=float(d["sigma0"]),
-                                   lr=float(d["lr"]), samples=int(d["samples"]), budget=budget,
-                                   seed=seed, batched=True, bounds=bounds)
+    result = plateau_free.minimize(fun, start, **method_options(method, d, budget), seed=seed,
+                                   batched=True, bounds=bounds)
     seconds = time.perf_counter() - t0
     x = np.asarray(result.x, dtype=np.float64)
     final = twin.render(x, seed)
     write_png(mi, final, out / f"{task}-seed-{seed}-final.png")
     write_png(mi, reference, out / f"{task}-seed-{seed}-target.png")
     return {
-        "task": task, "seed": seed, "scale": scale, "spp": twin.spp,
+        "task": task, "method": method, "seed": seed, "scale": scale, "spp": twin.spp,
         "width": int(twin.desc["film"]["width"]), "height": int(twin.desc["film"]["height"]),
         "budget": budget, "paper_budget": int(d["samples"] * d["iterations"]), "nfev": int(result.nfev),
         "start_param_mse": float(np.mean((start - target) ** 2)),
@@ -134,7 +148,7 @@ def stored_runs(out: Path) -> list[dict[str, Any]]:
     return sorted(rows, key=lambda r: (TASKS.index(r["task"]), int(r["seed"])))
 
 
-def page(rows: list[dict[str, Any]], out: Path, seeds: list[int]) -> str:
+def page(rows: list[dict[str, Any]], out: Path, seeds: list[int], tasks: tuple[str, ...] = TASKS) -> str:
     commands = sorted({r["command"] for r in rows if r.get("command")})
     lines = [
         "# The tasks' default method on their Mitsuba twins",
@@ -151,17 +165,17 @@ def page(rows: list[dict[str, Any]], out: Path, seeds: list[int]) -> str:
         "column against `paper budget` (CUP, OCCLUSION, CAUSTIC and GI at half resolution and the "
         "paper's budget; SORT and TEXTURE at full resolution and a small part of it).",
         "",
-        "| task | seed | scale | size | spp | budget | paper budget | start param MSE | final param MSE | "
+        "| task | method | seed | scale | size | spp | budget | paper budget | start param MSE | final param MSE | "
         "start image MSE | final image MSE | s / render |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         lines.append(
-            f"| {r['task']} | {r['seed']} | {r['scale']:g} | {r['width']}x{r['height']} | {r['spp']} "
+            f"| {r['task']} | {r.get('method', 'polished')} | {r['seed']} | {r['scale']:g} | {r['width']}x{r['height']} | {r['spp']} "
             f"| {r['budget']} | {r['paper_budget']} | {r['start_param_mse']:.3e} | {r['param_mse']:.3e} "
             f"| {r['start_image_mse']:.3e} | {r['image_mse']:.3e} | {r['seconds_per_render']:.3f} |")
     done = {(r["task"], int(r["seed"])) for r in rows}
-    missing = {t: [s for s in seeds if (t, s) not in done] for t in TASKS}
+    missing = {t: [s for s in seeds if (t, s) not in done] for t in tasks}
     lines += ["", "Not run (the command that completes it):" if any(missing.values()) else "Not run: none."]
     for t, m in missing.items():
         if m:
