@@ -19,6 +19,9 @@
 //!   bilinear, clamped at the edges, texel centres at half-integers;
 //! - `defaults`: the task's supplemental Table 1 row (`samples`, `sigma0`, `spp`, `lr`,
 //!   `iterations`) and `unit_box` (theta in [0, 1]^n, else unbounded);
+//! - `paper` (all tasks but TEXTURE): the paper's results, main paper Table 2 (`image_mse`,
+//!   `param_mse`, `mitsuba_image_mse`, `mitsuba_param_mse`) and Table 3
+//!   (`seconds_per_iteration`, GPU);
 //! - `shapes`: `sphere` (`center`, `radius`), `quad` (corner `origin`, edges `u`, `v`, normal
 //!   u x v, texture uv = the edge fractions, `emission` for a one-sided area light facing the
 //!   normal), `box` (`to_world`: the map from the cube [-1, 1]^3) and `mesh` (`file`, an OBJ of
@@ -33,7 +36,7 @@ use glam::{Affine3A, Vec3A};
 use serde_json::{json, Value};
 
 use crate::render::{Image, Material, Scene, Settings};
-use crate::tasks::Defaults;
+use crate::tasks::{Defaults, Paper};
 
 /// The format's name and version, the first key of `scene.json`.
 pub const FORMAT: &str = "pathtracer-scene 1";
@@ -54,6 +57,8 @@ pub struct Header<'a> {
     pub settings: Settings,
     /// The task's hyperparameters (supplemental Table 1) and whether theta lives in [0, 1]^n.
     pub defaults: Option<(Defaults, bool)>,
+    /// The paper's results for the task (main paper Table 2, Table 3's seconds), if it has them.
+    pub paper: Option<Paper>,
 }
 
 /// Writes `scene.json` and its mesh and texture files into `dir` (which must exist).
@@ -129,6 +134,13 @@ pub fn describe(header: &Header, scene: &Scene, files: &mut Vec<(String, File)>)
         value["defaults"] = json!({
             "samples": d.samples, "sigma0": d.sigma0, "spp": d.spp, "lr": d.lr,
             "iterations": d.iterations, "unit_box": unit_box,
+        });
+    }
+    if let Some(p) = header.paper {
+        value["paper"] = json!({
+            "image_mse": p.image_mse, "param_mse": p.param_mse,
+            "seconds_per_iteration": p.seconds_per_iteration,
+            "mitsuba_image_mse": p.mitsuba_image_mse, "mitsuba_param_mse": p.mitsuba_param_mse,
         });
     }
     value
@@ -226,6 +238,7 @@ mod tests {
                 theta: &theta,
                 settings: Settings::new(4, 0, task.max_depth()),
                 defaults: Some((task.defaults(), task.bounds().is_some())),
+                paper: task.paper(),
             };
             let mut files = Vec::new();
             let v = describe(&header, &scene, &mut files);
@@ -259,6 +272,7 @@ mod tests {
             assert_eq!(v.get("theta_file").is_some(), task.dim() > THETA_INLINE);
             assert_eq!(v["defaults"]["samples"], task.defaults().samples);
             assert_eq!(v["defaults"]["unit_box"], task.bounds().is_some());
+            assert_eq!(v.get("paper").is_some(), task.name() != "texture");
         }
     }
 
@@ -274,6 +288,7 @@ mod tests {
             theta: &theta,
             settings: Settings::new(32, 0, 6),
             defaults: None,
+            paper: None,
         };
         let v = describe(&header, &scene, &mut Vec::new());
         let hfov = v["camera"]["hfov_degrees"].as_f64().unwrap();
