@@ -720,6 +720,20 @@ fn the_seeds_page_puts_studies_side_by_side() {
     let _ = std::fs::remove_dir_all(&runs);
 }
 
+/// `args` exit 2 with one line naming each of `names`, and nothing is written to `out`.
+fn refused_before_any_work(args: &[&str], names: &[&str], out: &std::path::Path) {
+    let (code, stderr) = run(args);
+    assert_eq!(code, Some(2), "{args:?}: {stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
+    for name in names {
+        assert!(
+            stderr.contains(name),
+            "{args:?}: {name:?} not in {stderr:?}"
+        );
+    }
+    assert!(!out.exists(), "{args:?} wrote {out:?}");
+}
+
 #[test]
 fn export_writes_the_scene_and_refuses_bad_input_before_any_work() {
     let out = fresh("export");
@@ -742,16 +756,7 @@ fn export_writes_the_scene_and_refuses_bad_input_before_any_work() {
             vec!["--scale", "> 0"],
         ),
     ] {
-        let (code, stderr) = run(&args);
-        assert_eq!(code, Some(2), "{args:?}: {stderr}");
-        assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
-        for name in names {
-            assert!(
-                stderr.contains(name),
-                "{args:?}: {name:?} not in {stderr:?}"
-            );
-        }
-        assert!(!out.exists(), "{args:?} wrote {out:?}");
+        refused_before_any_work(&args, &names, &out);
     }
     let (code, stderr) = run(&[
         "export",
@@ -821,16 +826,7 @@ fn export_reads_params_from_a_file_and_refuses_a_bad_one_before_any_work() {
     ] {
         let mut all = vec!["export", "shadow", "--out", &out_arg];
         all.extend(&args);
-        let (code, stderr) = run(&all);
-        assert_eq!(code, Some(2), "{args:?}: {stderr}");
-        assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
-        for name in names {
-            assert!(
-                stderr.contains(name),
-                "{args:?}: {name:?} not in {stderr:?}"
-            );
-        }
-        assert!(!out.exists(), "{args:?} wrote {out:?}");
+        refused_before_any_work(&all, &names, &out);
     }
     let (code, stderr) = run(&[
         "export",
