@@ -73,6 +73,12 @@ def _number(v: Any) -> Optional[float]:
     return None if math.isnan(x) else x
 
 
+def _short(v: Any) -> str:
+    """A setting as written briefly: a number in its shortest form (2.500000e-01 -> 0.25)."""
+    x = _number(v)
+    return str(v).strip() if x is None else f"{x:g}"
+
+
 def _json(path: Path) -> Optional[dict[str, Any]]:
     return json.loads(path.read_text()) if path.is_file() else None
 
@@ -135,7 +141,7 @@ def read_gradient(results: Path) -> dict[tuple[str, int], Row]:
                 key = (str(r["task"]).strip().lower(), int(r["seed"]))
             except (KeyError, TypeError, ValueError):
                 continue
-            settings = ", ".join(f"{k} {r[k]}" for k in ("integrator", "iterations", "spp", "scale", "lr")
+            settings = ", ".join(f"{k} {_short(r[k])}" for k in ("integrator", "iterations", "spp", "scale", "lr")
                                  if r.get(k) not in (None, ""))
             runs[key] = {
                 "settings": settings or NOT_MEASURED,

@@ -81,7 +81,7 @@ def test_mitsubas_gradient_runs_are_read_and_missing_columns_are_not_measured(tm
     csv_path.parent.mkdir(parents=True)
     # No seconds_per_iteration and no start_image_mse column; seed 1's final MSE is empty.
     csv_path.write_text("task,seed,integrator,iterations,spp,scale,lr,start_param_mse,final_param_mse,final_image_mse\n"
-                        "cup,0,prb_projective,50,16,0.5,0.01,0.0625,0.0625,1.4e-4\n"
+                        "cup,0,prb_projective,50,16,5.000000e-01,1.000000e-02,0.0625,0.0625,1.4e-4\n"
                         "cup,1,prb_projective,50,16,0.5,0.01,0.0625,,\n"
                         "CUP,2,prb_projective,50,16,0.5,0.01,0.0625,2e-7,3e-9\n")
     text = tp.build_page(results, results, PAPER, "CMD")
