@@ -184,8 +184,9 @@ def page(rows: list[dict[str, Any]], out: Path, seeds: list[int], tasks: tuple[s
         if m:
             lines.append(f"- {t} seed{'s' if len(m) > 1 else ''} {', '.join(map(str, m))}: "
                          f"`{complete_command(t, m, out)}`")
-    lines += ["", "Every run is made again (deterministic given its seed) by deleting its JSON and running the "
-              "command above for its task and seed, which uses the task's setting in `SETTINGS`."]
+    lines += ["", "Every run is made again (deterministic given its seed) by deleting its JSON and running "
+              f"`{complete_command('TASK', [0], out).replace('--seeds 0', '--seeds SEED')}`, which uses the "
+              "task's setting in `SETTINGS`."]
     if commands:
         lines += ["The runs that stored their command line were made by:", ""] + [f"- `{c}`" for c in commands]
     return "\n".join(lines)
