@@ -1,4 +1,4 @@
-"""Mitsuba's own gradient on SHADOW (part of mitsuba_shadow.py): a differentiable integrator,
+"""Mitsuba's own gradient on SHADOW (part of mitsuba_optimize.py): a differentiable integrator,
 Dr.Jit's backward pass and Mitsuba's Adam from the same start as plateau-free's runs."""
 
 from __future__ import annotations

@@ -42,6 +42,14 @@ def read_description(directory: str | os.PathLike[str]) -> dict[str, Any]:
     return desc
 
 
+def theta_of(desc: dict[str, Any]) -> list[float]:
+    """The description's parameters: ``theta``, or a large task's side file ``theta_file``."""
+    if "theta" in desc:
+        return [float(t) for t in desc["theta"]]
+    with open(Path(desc["_dir"]) / desc["theta_file"]) as f:
+        return [float(t) for t in json.load(f)]
+
+
 def _cross(a, b):
     return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 

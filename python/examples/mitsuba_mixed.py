@@ -14,7 +14,7 @@ reflectance Mitsuba's gradient and the position ours (``--samples`` renders at p
 positions); one ``mi.ad.Adam`` steps both. The paper's SHADOW settings by default (N = 2,
 sigma0 = 0.5 annealed as the paper's, LR 0.02, 400 iterations), at ``--scale 0.5`` of
 256x192 and ``--spp 16`` to fit a few minutes on two cores. Every render uses the run's seed
-(common random numbers, as mitsuba_shadow.py's default ``--crn fixed``). Writes
+(common random numbers, as mitsuba_optimize.py's default ``--crn fixed``). Writes
 ``summary.json`` and ``history.csv`` into ``--out``.
 
     target/venv/bin/python python/examples/mitsuba_mixed.py --page docs/results/mitsuba-mixed

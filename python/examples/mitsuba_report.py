@@ -1,4 +1,4 @@
-"""The results pages of the Mitsuba SHADOW example (mitsuba_shadow.py --seeds K): the paper
+"""The results pages of the Mitsuba SHADOW example (mitsuba_optimize.py --seeds K): the paper
 loop's runs next to our renderer's and Mitsuba's AD (OUT.md, docs/results/mitsuba.md), and
 the adaptive search's next to the paper loop's."""
 
@@ -89,7 +89,7 @@ def write_page(args, out: Path, seeds: list[int]) -> Path:
     ad_dir = out / "ad"
     ad = json.loads((ad_dir / "summary.json").read_text()) if (ad_dir / "summary.json").exists() else None
 
-    cmd = f"python python/examples/mitsuba_shadow.py --seeds {len(seeds)} --out {os.path.relpath(out, REPO)}"
+    cmd = f"python python/examples/mitsuba_optimize.py --method plateau --seeds {len(seeds)} --out {os.path.relpath(out, REPO)}"
     L = ["# SHADOW on two backbones: our path tracer and Mitsuba 3", "",
          f"Written by `{cmd}` (after `scripts/install-mitsuba`; `--page-only` rewrites this page from the runs). "
          "Mitsuba runs: " + f"`{os.path.relpath(out, REPO)}/seed-<k>/`" + "; our renderer's runs are read from "
@@ -241,7 +241,7 @@ def write_page_adaptive(args, out: Path, seeds: list[int]) -> Path:
         if f.exists():
             paper[s] = json.loads(f.read_text())
     outrel = os.path.relpath(out.resolve(), REPO)
-    cmd = (f"python python/examples/mitsuba_shadow.py --method {name} --seeds {len(seeds)}"
+    cmd = (f"python python/examples/mitsuba_optimize.py --method {name} --seeds {len(seeds)}"
            + (f" --run-seeds {args.run_seeds}" if args.run_seeds else "")
            + (f" --stop-at {args.stop_at}" if args.stop_at else "")
            + f" --out {outrel}")

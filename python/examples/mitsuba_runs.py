@@ -1,4 +1,4 @@
-"""One seed of the Mitsuba SHADOW example (mitsuba_shadow.py): plateau-free's paper loop, its
+"""One seed of the Mitsuba SHADOW example (mitsuba_optimize.py): plateau-free's paper loop, its
 adaptive search, or the loop polished by the adaptive search, on Mitsuba renders, the run's files (images, history.csv, summary.json,
 convergence.png) and its settings."""
 

@@ -1,17 +1,18 @@
 """A task's Mitsuba twin that moves with theta as the task says (``pathtracer export``).
 
 ``Twin(mi, task)`` loads the task's exported scene at its start once; ``set_theta(theta)``
-asks the exporter for the scene at theta (``pathtracer export TASK --params ...``, a few
-milliseconds) and writes what changed into the loaded scene through ``mi.traverse``: a
+asks the exporter for the scene at theta (``pathtracer export TASK --params-file FILE``, a
+few milliseconds) and writes what changed into the loaded scene through ``mi.traverse``: a
 sphere's or a quad's ``to_world``, a box's or a mesh's vertices (moved from the start's by
-the change of its ``to_world``), a material's albedo, an emitter's radiance, a point light.
-No scene reload, no second description of how the parameters move the scene.
-
-Tasks of up to 1000 parameters (TEXTURE's 49,152 do not fit a command line).
+the change of its ``to_world``), a material's albedo, a texture's texels (TEXTURE's bitmap,
+read from the exporter's image), an emitter's radiance, a point light. No scene reload, no
+second description of how the parameters move the scene.
 """
 
 from __future__ import annotations
 
+import json
+import os
 import subprocess
 import tempfile
 from typing import Any
@@ -20,8 +21,6 @@ import numpy as np
 
 import mitsuba_export as mx
 
-MAX_PARAMS = 1000
-
 
 def _affine(rows) -> np.ndarray:
     m = np.eye(4)
@@ -29,17 +28,26 @@ def _affine(rows) -> np.ndarray:
     return m
 
 
-def export_at(task: str, theta, spp: int | None = None, scale: float | None = None) -> dict[str, Any]:
-    """The task's description at ``theta`` (the exporter's side files are not kept)."""
-    values = ",".join(repr(float(t)) for t in theta)
+def export_at(task: str, theta, spp: int | None = None, scale: float | None = None,
+              mi=None) -> dict[str, Any]:
+    """The task's description at ``theta``; with ``mi``, its textures' texels as arrays in
+    ``desc["texels"]`` (the exporter's side files are not kept)."""
     with tempfile.TemporaryDirectory() as tmp:
-        cmd = [mx.pathtracer_binary(), "export", task, f"--params={values}", "--out", tmp]
+        params = os.path.join(tmp, "params.json")
+        with open(params, "w") as f:
+            json.dump([float(t) for t in theta], f)
+        out = os.path.join(tmp, "out")
+        cmd = [mx.pathtracer_binary(), "export", task, "--params-file", params, "--out", out]
         if spp is not None:
             cmd += ["--spp", str(spp)]
         if scale is not None:
             cmd += ["--scale", repr(float(scale))]
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-        return mx.read_description(tmp)
+        desc = mx.read_description(out)
+        if mi is not None:
+            desc["texels"] = [np.array(mi.Bitmap(os.path.join(out, t["file"])), dtype=np.float32)
+                              for t in desc["textures"]]
+        return desc
 
 
 class Twin:
@@ -50,14 +58,12 @@ class Twin:
         self.mi, self.task, self.scale = mi, task, scale
         with tempfile.TemporaryDirectory() as tmp:
             desc = mx.run_export(task, tmp, "start", spp=spp, scale=scale)
-            if len(desc.get("theta", [])) == 0 or len(desc["theta"]) > MAX_PARAMS:
-                raise ValueError(f"task {task!r}: more than {MAX_PARAMS} parameters; a twin moves tasks of fewer")
+            self.theta = mx.theta_of(desc)
             self.spp = int(desc["spp"])
             # optimize=False: Mitsuba would merge meshes sharing a BSDF, and each box must move alone.
             self.scene = mi.load_dict(mx.scene_dict(mi, desc, self.spp, integrator), optimize=False)
         self.params = mi.traverse(self.scene)
         self.desc = desc
-        self.theta = [float(t) for t in desc["theta"]]
         self._local: dict[str, np.ndarray] = {}
         for k, s in enumerate(desc["shapes"]):
             if s["type"] in ("box", "mesh"):
@@ -83,21 +89,34 @@ class Twin:
         if "emission" in s:
             self.params[name + ".emitter.radiance.value"] = mi.Color3f(*s["emission"])
 
+    def _set_materials(self, old: dict[str, Any], new: dict[str, Any]) -> None:
+        for m, (a, b) in enumerate(zip(old["materials"], new["materials"])):
+            if b["type"] != "diffuse":
+                continue
+            texels = new["texels"][b["texture"]] if "texture" in b else None
+            if a == b and texels is None:
+                continue
+            for k, s in enumerate(new["shapes"]):
+                if s["material"] != m:
+                    continue
+                reflectance = self._name(k) + ".bsdf.brdf_0.reflectance"
+                if texels is not None:
+                    # The texture's texels are the parameters (TEXTURE): a new bitmap every move.
+                    self.params[reflectance + ".data"] = self.mi.TensorXf(texels)
+                else:
+                    self.params[reflectance + ".value"] = self.mi.Color3f(*b["albedo"])
+
     def set_theta(self, theta) -> None:
         """Moves the scene to ``theta`` (what the exporter says changed)."""
         theta = [float(t) for t in theta]
         if theta == self.theta:
             return
-        new = export_at(self.task, theta, self.spp, self.scale)
+        new = export_at(self.task, theta, self.spp, self.scale, mi=self.mi)
         old = self.desc
         for k, (a, b) in enumerate(zip(old["shapes"], new["shapes"])):
             if {x: y for x, y in a.items() if x != "material"} != {x: y for x, y in b.items() if x != "material"}:
                 self._set_shape(k, b)
-        for m, (a, b) in enumerate(zip(old["materials"], new["materials"])):
-            if a != b and b["type"] == "diffuse":
-                for k, s in enumerate(new["shapes"]):
-                    if s["material"] == m:
-                        self.params[self._name(k) + ".bsdf.brdf_0.reflectance.value"] = self.mi.Color3f(*b["albedo"])
+        self._set_materials(old, new)
         for k, (a, b) in enumerate(zip(old["point_lights"], new["point_lights"])):
             if a != b:
                 self.params[f"point_{k}.position"] = self.mi.Point3f(*b["position"])

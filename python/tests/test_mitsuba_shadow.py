@@ -1,4 +1,5 @@
-"""SHADOW on Mitsuba 3 (python/examples/mitsuba_shadow.py): a short run, the scene, the hint.
+"""Tasks on Mitsuba 3 (python/examples/mitsuba_optimize.py): SHADOW's short runs, the scene, the
+hints; another task (CUP) on its twin through the same command.
 
 Needs mitsuba in the interpreter that runs pytest: `scripts/install-mitsuba VENV` installs it.
 Without it the Mitsuba tests are skipped, or fail when PLATEAU_FREE_REQUIRE_MITSUBA=1 (the test
@@ -22,7 +23,7 @@ import plateau_free
 
 REPO = Path(__file__).resolve().parents[2]
 EXAMPLES = REPO / "python" / "examples"
-EXAMPLE = EXAMPLES / "mitsuba_shadow.py"
+EXAMPLE = EXAMPLES / "mitsuba_optimize.py"
 sys.path.insert(0, str(EXAMPLES))
 
 HAVE_MITSUBA = importlib.util.find_spec("mitsuba") is not None
@@ -37,7 +38,7 @@ needs_mitsuba = pytest.mark.skipif(
 def test_without_mitsuba_the_example_says_how_to_install_it():
     code = (
         "import sys, runpy; sys.modules['mitsuba'] = None; "
-        f"sys.argv = ['mitsuba_shadow.py', '--out', 'unused']; runpy.run_path({str(EXAMPLE)!r}, run_name='__main__')"
+        f"sys.argv = ['mitsuba_optimize.py', '--out', 'unused']; runpy.run_path({str(EXAMPLE)!r}, run_name='__main__')"
     )
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert p.returncode != 0
@@ -50,7 +51,7 @@ def test_without_plateau_free_the_example_says_how_to_install_it():
     # The example runs the package itself (no stand-in): without it, one line saying how to get it.
     code = (
         "import sys, runpy; sys.modules['plateau_free'] = None; "
-        f"sys.argv = ['mitsuba_shadow.py', '--out', 'unused']; runpy.run_path({str(EXAMPLE)!r}, run_name='__main__')"
+        f"sys.argv = ['mitsuba_optimize.py', '--out', 'unused']; runpy.run_path({str(EXAMPLE)!r}, run_name='__main__')"
     )
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=REPO)
     assert p.returncode != 0
@@ -112,8 +113,8 @@ def assert_returns_its_best_render(s: dict, rows: list[dict]) -> None:
 @needs_mitsuba
 def test_short_run_writes_everything(tmp_path):
     out = tmp_path / "run"
-    cmd = [sys.executable, str(EXAMPLE), "--out", str(out), "--iterations", "4", "--scale", "0.125",
-           "--ad-iterations", "1", "--eval-every", "2", "--seed", "3"]
+    cmd = [sys.executable, str(EXAMPLE), "--method", "plateau", "--out", str(out), "--iterations", "4",
+           "--scale", "0.125", "--ad-iterations", "1", "--eval-every", "2", "--seed", "3"]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=REPO)
     assert p.returncode == 0, p.stderr[-3000:]
     for f in ("target.png", "initial.png", "final.png", "ad_final.png", "convergence.png",
@@ -234,3 +235,37 @@ def test_adaptive_page_compares_per_seed_and_names_seeds_not_run(tmp_path, metho
         assert "| seed | polished: param MSE |" in text and "| seed | target | start | polished | paper loop |" in text
     else:
         assert "adaptive" in text.splitlines()[0] and "polished" not in text
+
+
+@needs_mitsuba
+def test_any_task_runs_with_the_default_method_on_its_twin(tmp_path):
+    # --task cup: the tasks' default method (polished) on CUP's twin at 1/8 resolution and 2 %
+    # of the paper's budget (16 renders): its JSON, final and target images; a second call keeps it.
+    out = tmp_path / "cup"
+    cmd = [sys.executable, str(EXAMPLE), "--task", "cup", "--scale", "0.125", "--budget-scale", "0.02",
+           "--seed", "1", "--out", str(out)]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=600, cwd=REPO)
+    assert p.returncode == 0, p.stderr[-3000:]
+    row = json.loads((out / "cup-seed-1.json").read_text())
+    assert (row["task"], row["method"], row["seed"], row["budget"], row["paper_budget"]) == ("cup", "polished", 1, 16, 800)
+    assert row["nfev"] <= 16 and (row["width"], row["height"]) == (16, 12)
+    assert row["start_param_mse"] == pytest.approx(0.0625)
+    assert math.isfinite(row["param_mse"]) and math.isfinite(row["image_mse"])
+    assert row["image_mse"] <= row["start_image_mse"]  # polished returns the best point it rendered
+    assert (out / "cup-seed-1-final.png").is_file() and (out / "cup-seed-1-target.png").is_file()
+
+
+@pytest.mark.parametrize("extra, name", [(["--ad-iterations", "3"], "--ad-iterations"),
+                                         (["--budget-scale", "0"], "--budget-scale"),
+                                         (["--scale", "-1"], "--scale")])
+def test_shadow_only_and_bad_options_of_another_task_are_errors(tmp_path, extra, name):
+    p = subprocess.run([sys.executable, str(EXAMPLE), "--task", "gi", *extra, "--out", str(tmp_path / "x")],
+                       capture_output=True, text=True, timeout=300, cwd=REPO)
+    assert p.returncode == 2 and name in p.stderr, p.stderr
+    assert not (tmp_path / "x").exists()
+
+
+def test_budget_scale_is_not_an_option_of_shadow(tmp_path):
+    p = subprocess.run([sys.executable, str(EXAMPLE), "--budget-scale", "0.5", "--out", str(tmp_path / "x")],
+                       capture_output=True, text=True, timeout=300, cwd=REPO)
+    assert p.returncode == 2 and "--budget-scale" in p.stderr, p.stderr

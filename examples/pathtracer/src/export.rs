@@ -9,7 +9,9 @@
 //! - `film`: `width`, `height`; a box pixel filter (uniform jitter inside the pixel);
 //! - `camera`: `origin`, unit `forward` and `up` (image right = forward x up), `hfov_degrees`;
 //! - `spp`, `max_depth` (path segments, Mitsuba's convention), `task`, `params` (`start`,
-//!   `target` or `given`) and `theta` (for tasks of up to [`THETA_INLINE`] parameters);
+//!   `target` or `given`) and `theta` (for tasks of up to [`THETA_INLINE`] parameters; a
+//!   larger task's are in the side file `theta_file`, `theta.json`, a JSON array that
+//!   `--params-file` reads back);
 //! - `materials`: `{"type": "diffuse", "albedo": [r, g, b]}` (two-sided Lambertian), with
 //!   `"texture": k` when textured, or `{"type": "dielectric", "ior": x}` (IOR inside, the
 //!   shape's normal pointing out);
@@ -17,6 +19,9 @@
 //!   bilinear, clamped at the edges, texel centres at half-integers;
 //! - `defaults`: the task's supplemental Table 1 row (`samples`, `sigma0`, `spp`, `lr`,
 //!   `iterations`) and `unit_box` (theta in [0, 1]^n, else unbounded);
+//! - `paper` (all tasks but TEXTURE): the paper's results, main paper Table 2 (`image_mse`,
+//!   `param_mse`, `mitsuba_image_mse`, `mitsuba_param_mse`) and Table 3
+//!   (`seconds_per_iteration`, GPU);
 //! - `shapes`: `sphere` (`center`, `radius`), `quad` (corner `origin`, edges `u`, `v`, normal
 //!   u x v, texture uv = the edge fractions, `emission` for a one-sided area light facing the
 //!   normal), `box` (`to_world`: the map from the cube [-1, 1]^3) and `mesh` (`file`, an OBJ of
@@ -31,13 +36,13 @@ use glam::{Affine3A, Vec3A};
 use serde_json::{json, Value};
 
 use crate::render::{Image, Material, Scene, Settings};
-use crate::tasks::Defaults;
+use crate::tasks::{Defaults, Paper};
 
 /// The format's name and version, the first key of `scene.json`.
 pub const FORMAT: &str = "pathtracer-scene 1";
 
-/// Tasks with at most this many parameters list them in `scene.json` (TEXTURE's 49,152
-/// are in its texture).
+/// Tasks with at most this many parameters list them in `scene.json`; a larger task's
+/// (TEXTURE's 49,152) go to the side file `theta.json`.
 pub const THETA_INLINE: usize = 1000;
 
 /// What `scene.json` says besides the scene: the task, which parameters, the render settings.
@@ -52,6 +57,8 @@ pub struct Header<'a> {
     pub settings: Settings,
     /// The task's hyperparameters (supplemental Table 1) and whether theta lives in [0, 1]^n.
     pub defaults: Option<(Defaults, bool)>,
+    /// The paper's results for the task (main paper Table 2, Table 3's seconds), if it has them.
+    pub paper: Option<Paper>,
 }
 
 /// Writes `scene.json` and its mesh and texture files into `dir` (which must exist).
@@ -72,7 +79,7 @@ pub fn write(dir: &Path, header: &Header, scene: &Scene) -> std::io::Result<()> 
 
 /// A side file of the description: an OBJ mesh, or a texture as an image.
 pub enum File {
-    /// Text (an OBJ mesh).
+    /// Text (an OBJ mesh, the parameters as JSON).
     Text(String),
     /// A texture's texels as a linear image.
     Texture(Image),
@@ -118,11 +125,22 @@ pub fn describe(header: &Header, scene: &Scene, files: &mut Vec<(String, File)>)
     });
     if header.theta.len() <= THETA_INLINE {
         value["theta"] = json!(header.theta);
+    } else {
+        let name = "theta.json".to_string();
+        files.push((name.clone(), File::Text(json!(header.theta).to_string())));
+        value["theta_file"] = json!(name);
     }
     if let Some((d, unit_box)) = header.defaults {
         value["defaults"] = json!({
             "samples": d.samples, "sigma0": d.sigma0, "spp": d.spp, "lr": d.lr,
             "iterations": d.iterations, "unit_box": unit_box,
+        });
+    }
+    if let Some(p) = header.paper {
+        value["paper"] = json!({
+            "image_mse": p.image_mse, "param_mse": p.param_mse,
+            "seconds_per_iteration": p.seconds_per_iteration,
+            "mitsuba_image_mse": p.mitsuba_image_mse, "mitsuba_param_mse": p.mitsuba_param_mse,
         });
     }
     value
@@ -207,7 +225,8 @@ mod tests {
     use crate::tasks::{self, View};
 
     /// Every task describes itself: the camera's frame and field of view come back, every
-    /// shape names a material that exists, and the side files are the ones named.
+    /// shape names a material that exists, and the side files are the ones named (theta's
+    /// too, for TEXTURE).
     #[test]
     fn every_task_describes_its_scene() {
         for task in tasks::all() {
@@ -219,6 +238,7 @@ mod tests {
                 theta: &theta,
                 settings: Settings::new(4, 0, task.max_depth()),
                 defaults: Some((task.defaults(), task.bounds().is_some())),
+                paper: task.paper(),
             };
             let mut files = Vec::new();
             let v = describe(&header, &scene, &mut files);
@@ -244,12 +264,15 @@ mod tests {
                         .iter()
                         .filter_map(|t| t["file"].as_str()),
                 )
+                .chain(v["theta_file"].as_str())
                 .collect();
             let written: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
             assert_eq!(named, written, "{}", task.name());
             assert_eq!(v.get("theta").is_some(), task.dim() <= THETA_INLINE);
+            assert_eq!(v.get("theta_file").is_some(), task.dim() > THETA_INLINE);
             assert_eq!(v["defaults"]["samples"], task.defaults().samples);
             assert_eq!(v["defaults"]["unit_box"], task.bounds().is_some());
+            assert_eq!(v.get("paper").is_some(), task.name() != "texture");
         }
     }
 
@@ -265,6 +288,7 @@ mod tests {
             theta: &theta,
             settings: Settings::new(32, 0, 6),
             defaults: None,
+            paper: None,
         };
         let v = describe(&header, &scene, &mut Vec::new());
         let hfov = v["camera"]["hfov_degrees"].as_f64().unwrap();

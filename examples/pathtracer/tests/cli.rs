@@ -720,6 +720,20 @@ fn the_seeds_page_puts_studies_side_by_side() {
     let _ = std::fs::remove_dir_all(&runs);
 }
 
+/// `args` exit 2 with one line naming each of `names`, and nothing is written to `out`.
+fn refused_before_any_work(args: &[&str], names: &[&str], out: &std::path::Path) {
+    let (code, stderr) = run(args);
+    assert_eq!(code, Some(2), "{args:?}: {stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
+    for name in names {
+        assert!(
+            stderr.contains(name),
+            "{args:?}: {name:?} not in {stderr:?}"
+        );
+    }
+    assert!(!out.exists(), "{args:?} wrote {out:?}");
+}
+
 #[test]
 fn export_writes_the_scene_and_refuses_bad_input_before_any_work() {
     let out = fresh("export");
@@ -742,16 +756,7 @@ fn export_writes_the_scene_and_refuses_bad_input_before_any_work() {
             vec!["--scale", "> 0"],
         ),
     ] {
-        let (code, stderr) = run(&args);
-        assert_eq!(code, Some(2), "{args:?}: {stderr}");
-        assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
-        for name in names {
-            assert!(
-                stderr.contains(name),
-                "{args:?}: {name:?} not in {stderr:?}"
-            );
-        }
-        assert!(!out.exists(), "{args:?} wrote {out:?}");
+        refused_before_any_work(&args, &names, &out);
     }
     let (code, stderr) = run(&[
         "export",
@@ -775,4 +780,106 @@ fn export_writes_the_scene_and_refuses_bad_input_before_any_work() {
     let obj = std::fs::read_to_string(out.join("mesh-0.obj")).expect("the mug's mesh");
     assert_eq!(obj.lines().filter(|l| l.starts_with("f ")).count(), 1280);
     let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn export_reads_params_from_a_file_and_refuses_a_bad_one_before_any_work() {
+    let dir = fresh("params-file");
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("out");
+    let out_arg = out.display().to_string();
+    let file = |name: &str, text: &str| {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        path.display().to_string()
+    };
+    let missing = dir.join("missing.json").display().to_string();
+    let short = file("short.json", "[0.5]");
+    let words = file("words.json", "0.5, 0.5");
+    let huge = file("huge.json", "[0.5, 1e999]");
+    let good = file("good.json", "[0.25, 0.75]\n");
+    for (args, names) in [
+        (
+            vec!["--params-file", missing.as_str()],
+            vec!["--params-file", "missing.json", "read"],
+        ),
+        (
+            vec!["--params-file", short.as_str()],
+            vec!["--params-file", "short.json", "1 values", "2"],
+        ),
+        (
+            vec!["--params-file", words.as_str()],
+            vec!["--params-file", "words.json", "JSON array"],
+        ),
+        (
+            vec!["--params-file", huge.as_str()],
+            vec!["--params-file", "huge.json"],
+        ),
+        (
+            vec!["--params-file", good.as_str(), "--initial"],
+            vec!["--params-file", "--initial"],
+        ),
+        (
+            vec!["--params-file", good.as_str(), "--params", "1,2"],
+            vec!["--params-file", "--params"],
+        ),
+    ] {
+        let mut all = vec!["export", "shadow", "--out", &out_arg];
+        all.extend(&args);
+        refused_before_any_work(&all, &names, &out);
+    }
+    let (code, stderr) = run(&[
+        "export",
+        "shadow",
+        "--params-file",
+        &good,
+        "--out",
+        &out_arg,
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let text = std::fs::read_to_string(out.join("scene.json")).expect("scene.json");
+    let scene: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    assert_eq!(scene["params"], "given");
+    assert_eq!(scene["theta"], serde_json::json!([0.25, 0.75]));
+    // TEXTURE's 49,152 parameters go to theta.json, which --params-file reads back: the
+    // start exported again from its own theta.json is the same start.
+    let start = dir.join("start");
+    let (code, stderr) = run(&[
+        "export",
+        "texture",
+        "--initial",
+        "--scale",
+        "0.125",
+        "--out",
+        &start.display().to_string(),
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let scene: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(start.join("scene.json")).unwrap()).unwrap();
+    assert!(scene.get("theta").is_none());
+    assert_eq!(scene["theta_file"], "theta.json");
+    let theta: Vec<f64> =
+        serde_json::from_str(&std::fs::read_to_string(start.join("theta.json")).unwrap()).unwrap();
+    assert_eq!(theta.len(), 49_152);
+    assert!(theta.iter().all(|&t| t == 0.5));
+    let again = dir.join("again");
+    let theta_file = start.join("theta.json").display().to_string();
+    let (code, stderr) = run(&[
+        "export",
+        "texture",
+        "--params-file",
+        &theta_file,
+        "--scale",
+        "0.125",
+        "--out",
+        &again.display().to_string(),
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    // The same parameters back (the EXR's bytes may differ: its blocks are compressed in
+    // parallel and written in the order they finish).
+    assert_eq!(
+        std::fs::read_to_string(start.join("theta.json")).unwrap(),
+        std::fs::read_to_string(again.join("theta.json")).unwrap()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -40,6 +40,7 @@ pub(super) fn run(args: Args) -> Result<()> {
         theta: &theta,
         settings: Settings::new(args.spp.unwrap_or(task.defaults().spp), 0, task.max_depth()),
         defaults: Some((task.defaults(), task.bounds().is_some())),
+        paper: task.paper(),
     };
     std::fs::create_dir_all(&args.out)?;
     export::write(&args.out, &header, &scene)?;

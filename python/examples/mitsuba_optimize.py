@@ -1,26 +1,41 @@
 #!/usr/bin/env python3
-"""SHADOW on Mitsuba 3: plateau-free's gradient against Mitsuba's own (issue 13).
+"""Any task on Mitsuba 3: plateau-free through the Python package, and Mitsuba's own gradient.
 
-The SHADOW task of docs/tasks.md (the scene: mitsuba_scene.py) rendered by Mitsuba 3
-(CPU variant llvm_ad_rgb), optimised
+One command runs any task of docs/tasks.md on its Mitsuba twin (``--task``, default shadow)
+with the tasks' default method, ``polished`` (the paper's loop, then the adaptive search):
 
-1. by plateau-free (``plateau_free.minimize``: radial sampler, antithetic pairs, the paper's annealer
-   and Adam) from the paper's start at its Table 1 settings (N=2, sigma0=0.5, 32 spp,
-   LR 0.02, 400 iterations), the renderer a black box: image MSE against the target;
-2. by Mitsuba's own gradient: a projective integrator (``direct_projective`` by default)
-   differentiated by Dr.Jit, with Adam at the same learning rate, for fewer iterations
-   (it costs tens of seconds an iteration on two cores); the summary says how many.
+    python python/examples/mitsuba_optimize.py --task cup --out out/mitsuba-cup [--seed S]
+    python python/examples/mitsuba_optimize.py --task gi --seeds 3 --out out/mitsuba-gi
+
+A task other than SHADOW runs on its twin (mitsuba_twin.py: the task's export, moved by the
+exporter) with the task's supplemental Table 1 row from the export, at the resolution and
+budget of ``--scale`` and ``--budget-scale`` (default: the task's in mitsuba_twin_runs.SETTINGS),
+``--method polished|adaptive|plateau``; it writes ``OUT/<task>-seed-<k>.json`` with the final and
+target images and, with ``--seeds``, the page ``OUT.md`` (mitsuba_twin_runs.py). The options
+below that name SHADOW are SHADOW's only.
+
+SHADOW (the scene: mitsuba_scene.py) has the full study of issue 13: the paper's Table 1
+settings (N=2, sigma0=0.5, 32 spp, LR 0.02, 400 iterations), the renderer a black box (image
+MSE against the target), optimised
+
+1. by plateau-free (``plateau_free.minimize``), ``--method polished`` by default,
+   ``--method plateau`` the paper's loop alone (radial sampler, antithetic pairs, the paper's
+   annealer and Adam), ``--method adaptive`` the adaptive search;
+2. with ``--method plateau``, by Mitsuba's own gradient: a projective integrator
+   (``direct_projective`` by default) differentiated by Dr.Jit, with Adam at the same learning
+   rate, for fewer iterations (it costs tens of seconds an iteration on two cores); the summary
+   says how many.
 
 One run:
 
-    python python/examples/mitsuba_shadow.py --out out/mitsuba-shadow [--seed S]
+    python python/examples/mitsuba_optimize.py --method plateau --out out/mitsuba-shadow [--seed S]
 
 writes target.png, initial.png, final.png (plateau-free), ad_final.png (Mitsuba AD), history.csv,
 ad_history.csv, convergence.png and summary.json into the output folder.
 
 The per-seed study and its results page (docs/results/mitsuba.md):
 
-    python python/examples/mitsuba_shadow.py --seeds 5 --out docs/results/mitsuba
+    python python/examples/mitsuba_optimize.py --method plateau --seeds 5 --out docs/results/mitsuba
 
 runs seeds 0..4 into docs/results/mitsuba/seed-<k>/ (a seed whose summary.json exists is
 kept; --force reruns it), Mitsuba's AD once into docs/results/mitsuba/ad/, and writes
@@ -29,8 +44,8 @@ docs/results (--page-only rewrites the page from the runs alone).
 
 plateau-free's general-purpose adaptive search instead of the paper's loop (no Mitsuba AD):
 
-    python python/examples/mitsuba_shadow.py --method adaptive --out out/mitsuba-adaptive [--seed S]
-    python python/examples/mitsuba_shadow.py --method adaptive --seeds 5 --out docs/results/mitsuba-adaptive
+    python python/examples/mitsuba_optimize.py --method adaptive --out out/mitsuba-adaptive [--seed S]
+    python python/examples/mitsuba_optimize.py --method adaptive --seeds 5 --out docs/results/mitsuba-adaptive
 
 runs ``plateau_free.minimize(fun, x0, method="adaptive", budget=samples x iterations, sigma0=sigma0,
 seed=seed)`` (the paper's budget: 2 x 400 = 800 renders) on the same objective, one row of
@@ -40,8 +55,8 @@ to run and their order, --stop-at HH:MM starts no new seed after that time.
 
 The paper's loop polished by the adaptive search (no Mitsuba AD):
 
-    python python/examples/mitsuba_shadow.py --method polished --out out/mitsuba-polished [--seed S]
-    python python/examples/mitsuba_shadow.py --method polished --seeds 5 --out docs/results/mitsuba-polished
+    python python/examples/mitsuba_optimize.py --method polished --out out/mitsuba-polished [--seed S]
+    python python/examples/mitsuba_optimize.py --method polished --seeds 5 --out docs/results/mitsuba-polished
 
 runs ``plateau_free.minimize(fun, x0, method="polished", sigma0=sigma0, lr=lr, samples=samples,
 budget=samples x iterations, polish=0.25, seed=seed)`` (the paper's SHADOW settings, Table 1:
@@ -61,7 +76,8 @@ itself: `pip install plateau-free` (or `pip install ./python` from a clone of th
 
 The example's modules, beside this file: mitsuba_scene.py (the scene), mitsuba_runs.py (one
 seed's run), mitsuba_ad.py (Mitsuba's own gradient), mitsuba_report.py (the results pages),
-mitsuba_files.py (images, tables, plots); this file is the command line and the per-seed study.
+mitsuba_files.py (images, tables, plots), mitsuba_twin.py and mitsuba_twin_runs.py (the other
+tasks); this file is the command line and SHADOW's per-seed study.
 """
 
 from __future__ import annotations
@@ -76,6 +92,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 import mitsuba_scene as ms  # noqa: E402  (imports no mitsuba itself)
+from mitsuba_twin_runs import TASKS  # noqa: E402
 from mitsuba_ad import ad_keys, run_ad  # noqa: E402
 from mitsuba_report import write_page, write_page_adaptive  # noqa: E402
 from mitsuba_runs import replot, run_one, settings, time_renders  # noqa: E402
@@ -84,7 +101,9 @@ from mitsuba_runs import replot, run_one, settings, time_renders  # noqa: E402
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--method", choices=["plateau", "adaptive", "polished"], default="plateau",
+    p.add_argument("--task", choices=TASKS, default="shadow",
+                   help="the task (default shadow); another than shadow runs on its Mitsuba twin")
+    p.add_argument("--method", choices=["plateau", "adaptive", "polished"], default="polished",
                    help="plateau: the paper's loop (and Mitsuba's AD); adaptive: plateau_free.minimize(method='adaptive') "
                         "with a budget of samples x iterations renders (no AD); polished: "
                         "plateau_free.minimize(method='polished'), the paper's loop then the adaptive search, the same budget")
@@ -114,7 +133,8 @@ def main(argv=None) -> int:
     p.add_argument("--sigma0", type=float, default=0.5)
     p.add_argument("--lr", type=float, default=0.02)
     p.add_argument("--spp", type=int, default=32)
-    p.add_argument("--scale", type=float, default=1.0, help="resolution factor (1: 256x192)")
+    p.add_argument("--scale", type=float, default=None,
+                   help="resolution factor (SHADOW: default 1, 256x192; another task: default its setting)")
     p.add_argument("--crn", choices=["fixed", "pair"], default="fixed")
     p.add_argument("--eval-every", type=int, default=10, help="render the iterate for image MSE every K iterations")
     p.add_argument("--ad-integrator", default="direct_projective",
@@ -126,8 +146,16 @@ def main(argv=None) -> int:
     p.add_argument("--ad-only", action="store_true", help="only Mitsuba's AD run, into OUT/ad (with --seeds: seed 0's renders)")
     p.add_argument("--variant", default="llvm_ad_rgb")
     p.add_argument("--progress", type=int, default=50, help="print progress every K iterations (0: never)")
+    p.add_argument("--budget-scale", type=float, default=None,
+                   help="a task other than shadow: the share of the paper's budget (default: the task's setting)")
     args = p.parse_args(argv)
+    if args.task != "shadow":
+        return main_twin(p, args)
+    if args.budget_scale is not None:
+        p.error("--budget-scale: an option of the tasks other than shadow (SHADOW takes --iterations)")
 
+    if args.scale is None:
+        args.scale = 1.0
     if args.method != "polished" and args.polish != 0.25:
         p.error("--polish: an option of --method polished")
     if not 0.0 <= args.polish < 1.0:
@@ -204,6 +232,53 @@ def main(argv=None) -> int:
         run_study_ad(mi, args, out, seeds, force=args.force)
     merge_ad(mi, args, out, seeds)
     write_page(args, out, seeds)
+    return 0
+
+
+# --------------------------------------------------------------------------------------
+# A task other than SHADOW, on its twin.
+
+SHADOW_ONLY = ("page", "notes", "run_pathtracer", "force", "run_seeds", "plateau_runs", "polish",
+               "iterations", "samples", "sigma0", "lr", "spp", "crn", "eval_every", "ad_integrator",
+               "ad_iterations", "ad_seconds", "time_renders", "ad_only", "progress")
+
+
+def main_twin(p, args) -> int:
+    """``--task`` other than shadow: the task's Table 1 row on its twin (mitsuba_twin_runs.py)."""
+    import mitsuba_twin_runs as tr
+
+    for name in SHADOW_ONLY:
+        if getattr(args, name) != p.get_default(name):
+            p.error(f"--{name.replace('_', '-')}: an option of --task shadow only (the task's settings come "
+                    f"from its export)")
+    if args.scale is not None and not args.scale > 0:
+        p.error(f"--scale: {args.scale}; allowed: a number > 0")
+    if args.budget_scale is not None and not 0 < args.budget_scale <= 1:
+        p.error(f"--budget-scale: {args.budget_scale}; allowed: a number > 0 and <= 1")
+    scale = args.scale if args.scale is not None else tr.SETTINGS[args.task][0]
+    budget_scale = args.budget_scale if args.budget_scale is not None else tr.SETTINGS[args.task][1]
+    out = Path(args.out or f"out/mitsuba-{args.task}" + ("" if args.method == "polished" else f"-{args.method}"))
+    seeds = list(range(args.seeds)) if args.seeds else [args.seed]
+    for s in seeds:  # a folder holds one method's runs
+        f = out / f"{args.task}-seed-{s}.json"
+        if f.exists() and json.loads(f.read_text()).get("method", "polished") != args.method:
+            p.error(f"{f} is a run of another method than {args.method!r}: give it its own --out")
+    if not args.page_only:
+        mi = ms.load_mitsuba(args.variant)
+        out.mkdir(parents=True, exist_ok=True)
+        for s in seeds:
+            f = out / f"{args.task}-seed-{s}.json"
+            late = args.stop_at and time.strftime("%H:%M", time.localtime()) >= args.stop_at
+            if (f.exists() and args.seeds) or late:
+                continue
+            row = tr.one_run(mi, args.task, s, scale, budget_scale, out, args.method)
+            f.write_text(json.dumps(row, indent=1) + "\n")
+            print(json.dumps({k: row[k] for k in ("task", "method", "seed", "budget", "start_param_mse",
+                                                   "param_mse", "image_mse", "seconds_per_render")}), flush=True)
+    if args.seeds:
+        page = out.parent / f"{out.name}.md"
+        page.write_text(tr.page(tr.stored_runs(out), out, seeds, (args.task,)) + "\n")
+        print(page)
     return 0
 
 
