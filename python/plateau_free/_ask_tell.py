@@ -70,8 +70,7 @@ class AskTell:
         ``seeds``, a uint64 array of length ``k``.
 
         The adaptive search asks for one generation (one seed for all its points, a new one
-        each generation; the first ask adds ``x0`` itself, last, so that the result is never
-        worse than the start); the paper's loop for one gradient estimate (one seed per
+        each generation); the paper's loop for one gradient estimate (one seed per
         antithetic pair) and, last, for its final point alone (with ``seed``);
         ``'polished'`` for the paper loop's, then the adaptive search's. An objective
         with noise of its own should use the seeds (common random numbers): they are the

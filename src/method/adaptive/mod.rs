@@ -33,10 +33,6 @@ pub(crate) struct Adaptive {
     #[cfg_attr(feature = "serde", serde(with = "crate::saved::floats"))]
     points: Vec<f64>,
     seeds: Vec<u64>,
-    /// Whether the asked points end with the start itself (the run's first ask, when nothing
-    /// has been evaluated yet): the best point returned is then never worse than the start.
-    #[cfg_attr(feature = "serde", serde(default))]
-    asked_start: bool,
 }
 
 impl Adaptive {
@@ -78,7 +74,6 @@ impl Adaptive {
             asked: None,
             points: Vec::new(),
             seeds: Vec::new(),
-            asked_start: false,
         }
     }
 
@@ -106,10 +101,8 @@ impl Adaptive {
             let Some(dist) = &self.dist else {
                 return len("adaptive search asked without a distribution", 0, 1);
             };
-            // The first ask's points end with the start, which has no offset.
-            let asked = ys.len() + usize::from(self.asked_start);
-            len("adaptive asked seeds", self.seeds.len(), asked)?;
-            len("adaptive asked points", self.points.len(), asked * n)?;
+            len("adaptive asked offsets", ys.len(), self.seeds.len())?;
+            len("adaptive asked points", self.points.len(), ys.len() * n)?;
             if ys.len() > dist.p.lambda {
                 len("adaptive asked offsets", ys.len(), dist.p.lambda)?;
             }
@@ -144,13 +137,7 @@ impl Adaptive {
             dist
         });
         let mut ys = dist.sample(&mut self.rng).ys;
-        // The first ask of a run that has evaluated nothing (not the polish, whose start is
-        // the paper loop's evaluated point) evaluates the start too, after the generation:
-        // the best point seen then includes it, and at a spread far too wide for the
-        // function (n = 49,152 texels at the default sigma0, docs/results/large-scale.md)
-        // the result is the start rather than a worse draw.
-        let with_start = ledger.evaluations == 0 && ledger.left() > 0;
-        let count = ys.len().min(ledger.left() - usize::from(with_start));
+        let count = ys.len().min(ledger.left());
         ys.truncate(count);
         self.points.clear();
         for y in ys.iter_mut() {
@@ -169,10 +156,6 @@ impl Adaptive {
             }
             self.points.extend(x.iter());
         }
-        if with_start {
-            self.points.extend_from_slice(&self.start);
-        }
-        self.asked_start = with_start;
         if let Some(index) = self.points.iter().position(|v| !v.is_finite()) {
             return Err(Error::NonFinitePoint {
                 sample: ledger.evaluations + index / n,
@@ -182,7 +165,7 @@ impl Adaptive {
         }
         let seed = o.seed ^ (self.iterations as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
         self.seeds.clear();
-        self.seeds.resize(count + usize::from(with_start), seed);
+        self.seeds.resize(count, seed);
         self.asked = Some(ys);
         Ok(Ask::new(Points::new(&self.points, n), &self.seeds))
     }
@@ -204,11 +187,10 @@ impl Adaptive {
         if ledger.target_reached() {
             return Ok(end(Stop::Target, dist.sigma));
         }
-        if ledger.evaluations >= ledger.budget || ys.len() < dist.p.lambda {
+        if ledger.evaluations >= ledger.budget || values.len() < dist.p.lambda {
             return Ok(end(Stop::Budget, dist.sigma));
         }
-        // The start's value, when asked, comes after the generation's.
-        let ended = dist.update(ys, &values[..ys.len()]).is_some();
+        let ended = dist.update(ys, values).is_some();
         let sigma = dist.sigma;
         self.asked = None;
         if ended {
