@@ -56,21 +56,37 @@ def texture_cells(rows: list[Row]) -> dict[tuple[str, int, int], list[Row]]:
 
 
 def cell_text(runs: list[Row]) -> tuple[str, float]:
-    """The median loss over seeds 0-2 (n/a unless all three ran), with marks."""
-    by_seed = {int(r["seed"]): r for r in runs}
-    if any(s not in by_seed for s in SEEDS):
+    """The median loss over the seeds that ran (all of 0-2, or it says which), with marks:
+    how many runs the wall-time cap stopped before this budget, and how many ended worse than
+    their start."""
+    by_seed = {int(r["seed"]): r for r in runs if not math.isnan(float(r["loss"]))}
+    seeds = [s for s in SEEDS if s in by_seed]
+    if not seeds:
+        capped = [r for r in runs if r["capped"] == "1"]
+        if capped:
+            evals = sorted(int(r["evaluations"]) for r in capped)
+            return f"n/a (capped before it: {len(capped)} runs, at {fmt(evals[0])}-{fmt(evals[-1])} evaluations)", math.nan
         return "", math.nan
-    losses = [float(by_seed[s]["loss"]) for s in SEEDS]
+    losses = [float(by_seed[s]["loss"]) for s in seeds]
     med = median(losses)
     marks = ""
-    capped = [by_seed[s] for s in SEEDS if by_seed[s]["capped"] == "1"]
+    if len(seeds) < len(SEEDS):
+        plural = "s" if len(seeds) > 1 else ""
+        marks += f" (seed{plural} {', '.join(map(str, seeds))} only)"
+    b = int(runs[0]["budget"])
+    capped = [by_seed[s] for s in seeds if by_seed[s]["capped"] == "1" and int(by_seed[s]["evaluations"]) < b]
     if capped:
         evals = sorted(int(r["evaluations"]) for r in capped)
-        marks += f" (capped: {len(capped)} of 3, at {fmt(evals[0])}-{fmt(evals[-1])} evaluations)"
-    worse = sum(float(by_seed[s]["loss"]) > float(by_seed[s]["start_loss"]) for s in SEEDS)
+        marks += f" (capped: {len(capped)} of {len(seeds)}, at {fmt(evals[0])}-{fmt(evals[-1])} evaluations)"
+    worse = sum(float(by_seed[s]["loss"]) > float(by_seed[s]["start_loss"]) for s in seeds)
     if worse:
-        marks += f" **worse than the start in {worse} of 3**"
-    return fmt(med) + marks, med
+        marks += f", worse than the start in {worse} of {len(seeds)}"
+    return fmt(med) + "\u0000" + marks, med
+
+
+def bold(text: str) -> str:
+    number, _, marks = text.partition("\u0000")
+    return f"**{number}**" + marks
 
 
 def texture_table(rows: list[Row]) -> tuple[list[str], list[str]]:
@@ -93,7 +109,8 @@ def texture_table(rows: list[Row]) -> tuple[list[str], list[str]]:
                 continue
             starts = [float(r["start_loss"]) for arm in ARMS for r in cells.get((arm, n, b), [])]
             best = min((v for v in values[:3] if not math.isnan(v)), default=math.nan)
-            shown = [f"**{t}**" if t and v == best else (t or "not run") for t, v in zip(texts, values)]
+            shown = [bold(t) if t and v == best else (t or "not run") for t, v in zip(texts, values)]
+            shown = [t.replace("\u0000", "") for t in shown]
             start = fmt(median(sorted(set(starts)))) if starts else "n/a"
             lines.append(f"| {n:,} | {b:.0e} | {start} | " + " | ".join(shown) + " |")
     return lines, missing
@@ -135,7 +152,7 @@ def plot(rows: list[Row], path: str) -> None:
     import matplotlib.pyplot as plt
 
     cells = texture_cells(rows)
-    fig, axes = plt.subplots(1, len(SIZES), figsize=(4 * len(SIZES), 3.6), sharey=True)
+    fig, axes = plt.subplots(1, len(SIZES), figsize=(4 * len(SIZES), 3.6))
     for ax, n in zip(axes, SIZES):
         for arm, label in ARMS.items():
             xs, ys = [], []
@@ -143,15 +160,15 @@ def plot(rows: list[Row], path: str) -> None:
                 _, value = cell_text(cells.get((arm, n, b), []))
                 if not math.isnan(value):
                     xs.append(b)
-                    ys.append(max(value, 1e-35))
+                    ys.append(max(value, 1e-16))  # the image method's 1e-34: drawn at 1e-16
             if xs:
                 ax.plot(xs, ys, marker="o", label=label.replace("`", ""))
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_title(f"n = {n:,}")
         ax.set_xlabel("evaluations")
-    axes[0].set_ylabel("loss (median of seeds 0-2)")
-    axes[-1].legend(fontsize=7)
+    axes[0].set_ylabel("loss (median of seeds; 1e-16 = below)")
+    axes[0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
 
@@ -187,8 +204,8 @@ def before_after(before: list[Row], after: list[Row]) -> list[str]:
     lines = ["| n | evaluations | before (cumulative step-size adaptation) | after (median success rule) |", "|---|---|---|---|"]
     for n in SIZES:
         for budget in BUDGETS:
-            tb, _ = cell_text(b.get(("minimize", n, budget), []))
-            ta, _ = cell_text(a.get(("minimize", n, budget), []))
+            tb = cell_text(b.get(("minimize", n, budget), []))[0].replace("\u0000", "")
+            ta = cell_text(a.get(("minimize", n, budget), []))[0].replace("\u0000", "")
             if tb or ta:
                 lines.append(f"| {n:,} | {budget:.0e} | {tb or 'not run'} | {ta or 'not run'} |")
     return lines
