@@ -16,14 +16,6 @@
 //! while they align; the covariance learns the function's metric from the selected steps,
 //! which is what ill-conditioned and rotated problems need. There is no floor on `sigma`.
 //!
-//! With a diagonal metric (above [`crate::FULL_METRIC_MAX_DIM`] parameters by default) the
-//! spread follows the median success rule instead (Ait Elhara, Auger and Hansen, GECCO 2013;
-//! `SearchGaussian::median_success`): cumulative step-size adaptation changes `ln sigma` by
-//! at most `c_sigma / d_sigma ~ mueff / n` per generation, so at n = 49,152 an e-fold of
-//! `sigma` took at least 144,570 evaluations, and a start spread a hundred times too wide
-//! was never corrected within `10^5` (docs/results/large-scale.md). The success rule's time
-//! scale is a few generations at any `n`.
-//!
 //! Two rules are this crate's own, for plateaus:
 //! - **flat generation**: when the best quarter of a generation ties with its best value, the
 //!   points cannot be told apart; `sigma` grows by `exp(0.2 + c_sigma / d_sigma)` so that the
@@ -163,12 +155,6 @@ pub(crate) struct SearchGaussian {
     pub mirrored: bool,
     /// Grow sigma on flat generations.
     pub flat_growth: bool,
-    /// The median success rule's state (diagonal runs): the smoothed success `s` and the
-    /// comparison value, the previous generation's `ceil(0.3 lambda)`-th best.
-    #[cfg_attr(feature = "serde", serde(default))]
-    success: f64,
-    #[cfg_attr(feature = "serde", serde(default))]
-    reference: Option<f64>,
 }
 
 /// One generation's draws: `ys` are the offsets `y_k` (so that `x_k = m + sigma y_k`).
@@ -248,8 +234,6 @@ impl SearchGaussian {
             median_history: Vec::new(),
             mirrored: false,
             flat_growth: true,
-            success: 0.0,
-            reference: None,
         }
     }
 
@@ -382,17 +366,11 @@ impl SearchGaussian {
             }
         }
 
-        // Step size: cumulative step-size adaptation (full metric) or the median success rule
-        // (diagonal), and growth on flat generations.
-        let ds = p.ds;
-        let step = if self.full.is_some() {
-            cs / p.ds * (ps_norm / p.chi_n - 1.0)
-        } else {
-            self.median_success(values, &order)
-        };
-        self.sigma *= step.min(1.0).exp();
+        // Step size: cumulative step-size adaptation, and growth on flat generations.
+        let step = (cs / p.ds * (ps_norm / p.chi_n - 1.0)).min(1.0);
+        self.sigma *= step.exp();
         if flat && self.flat_growth {
-            self.sigma *= (0.2 + cs / ds).exp();
+            self.sigma *= (0.2 + cs / p.ds).exp();
         }
         self.generation += 1;
 
@@ -411,39 +389,6 @@ impl SearchGaussian {
         self.best_history.push(best);
         self.median_history.push(values[order[lambda / 2]]);
         self.check_end(flat, best, worst)
-    }
-
-    /// The median success rule's step `ln(sigma_new / sigma)` (Ait Elhara, Auger and Hansen,
-    /// "A Median Success Rule for Non-Elitist Evolution Strategies: Study of Feasibility",
-    /// GECCO 2013): a generation succeeds when more than half of its points beat the
-    /// previous generation's `ceil(0.3 lambda)`-th best value. `K` counts them (a tie counts
-    /// one half, so that a flat generation is neutral and the flat rule alone grows sigma),
-    /// `z = 2 (K - (lambda + 1) / 2) / lambda`, smoothed with weight 0.3, and the step is
-    /// `s / d` with `d = 2 (n - 1) / n` (at least 1). Its time scale does not grow with
-    /// `n`, where cumulative step-size adaptation's is `n / mueff` generations: at
-    /// n = 49,152 that was 4,000 generations per e-fold of sigma, longer than a budget of
-    /// `10^5` evaluations (docs/results/large-scale.md).
-    fn median_success(&mut self, values: &[f64], order: &[usize]) -> f64 {
-        let lambda = values.len();
-        let z = match self.reference {
-            Some(r) => {
-                let k: f64 = values
-                    .iter()
-                    .map(|&v| match v.total_cmp(&r) {
-                        std::cmp::Ordering::Less => 1.0,
-                        std::cmp::Ordering::Equal => 0.5,
-                        std::cmp::Ordering::Greater => 0.0,
-                    })
-                    .sum();
-                2.0 * (k - (lambda as f64 + 1.0) / 2.0) / lambda as f64
-            }
-            None => 0.0,
-        };
-        let j = ((0.3 * lambda as f64).ceil() as usize).clamp(1, lambda);
-        self.reference = Some(values[order[j - 1]]);
-        self.success = 0.7 * self.success + 0.3 * z;
-        let nf = self.n as f64;
-        self.success / (2.0 * (nf - 1.0) / nf).max(1.0)
     }
 
     fn decompose(&mut self) {
@@ -517,10 +462,7 @@ impl SearchGaussian {
 
 /// The cap on the diagonal metric's learning-rate factor `(n + 2) / 3` of separable CMA-ES:
 /// 1, i.e. the full metric's rates. Uncapped, the diagonal run stalled with a collapsing spread
-/// on the large-n sphere and a 2-D ellipse of `tests/minimize.rs` (measured with cumulative
-/// step-size adaptation, before the diagonal run's median success rule; not measured again).
-/// Capped, separable ill-conditioned functions (bbob f2) are learnt `(n + 2) / 3` times
-/// slower than by separable CMA-ES (docs/results/large-scale.md).
+/// on the large-n sphere and a 2-D ellipse of `tests/minimize.rs`.
 pub(crate) const DIAGONAL_RATE_CAP: f64 = 1.0;
 
 /// A generator for a run's seed.
