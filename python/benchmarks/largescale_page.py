@@ -84,6 +84,14 @@ def cell_text(runs: list[Row]) -> tuple[str, float]:
     return fmt(med) + "\u0000" + marks, med
 
 
+def in_grid(arm: str, n: int, budget: int) -> bool:
+    """Whether ``scripts/large-scale`` runs this cell: 10^4 and 10^5 everywhere (the image
+    method's 10^5 up to n = 3,072), 10^6 at n = 768 (not for the image method)."""
+    if budget == 1_000_000:
+        return n == 768 and arm != "image"
+    return not (arm == "image" and budget == 100_000 and n > 3072)
+
+
 def bold(text: str) -> str:
     number, _, marks = text.partition("\u0000")
     return f"**{number}**" + marks
@@ -101,7 +109,7 @@ def texture_table(rows: list[Row]) -> tuple[list[str], list[str]]:
             texts, values = [], []
             for arm in ARMS:
                 text, value = cell_text(cells.get((arm, n, b), []))
-                if not text:
+                if not text and in_grid(arm, n, b):
                     missing.append(f"{ARMS[arm]}, n = {n:,}, {b:.0e} evaluations")
                 texts.append(text)
                 values.append(value)
@@ -198,28 +206,33 @@ def time_scales() -> list[str]:
     return lines
 
 
-def before_after(before: list[Row], after: list[Row]) -> list[str]:
-    """``minimize`` before and after the change, median over seeds 0-2, per size and budget."""
-    b, a = texture_cells(before), texture_cells(after)
-    lines = ["| n | evaluations | before (cumulative step-size adaptation) | after (median success rule) |", "|---|---|---|---|"]
+def tried_table(default: list[Row], tried: dict[str, list[Row]]) -> list[str]:
+    """``minimize`` as it is (the default) beside the variants tried, median over seeds, per
+    size and budget."""
+    cells = {label: texture_cells(rows) for label, rows in tried.items()}
+    base = texture_cells(default)
+    head = "| n | evaluations | default (cumulative step-size adaptation) | " + " | ".join(f"tried: {k}" for k in tried) + " |"
+    lines = [head, "|---|---|---|" + "---|" * len(tried)]
     for n in SIZES:
         for budget in BUDGETS:
-            tb = cell_text(b.get(("minimize", n, budget), []))[0].replace("\u0000", "")
-            ta = cell_text(a.get(("minimize", n, budget), []))[0].replace("\u0000", "")
-            if tb or ta:
-                lines.append(f"| {n:,} | {budget:.0e} | {tb or 'not run'} | {ta or 'not run'} |")
+            texts = [cell_text(base.get(("minimize", n, budget), []))[0]]
+            texts += [cell_text(c.get(("minimize", n, budget), []))[0] for c in cells.values()]
+            if any(texts[1:]):
+                shown = [t.replace("\u0000", "") or "not run" for t in texts]
+                lines.append(f"| {n:,} | {budget:.0e} | " + " | ".join(shown) + " |")
     return lines
 
 
 def bbob_before_after(before: list[Row], after: list[Row]) -> list[str]:
-    """``minimize`` on bbob-largescale before and after the change, where both ran."""
+    """``minimize`` on bbob-largescale as it is (``before``) and with a variant tried
+    (``after``), where both ran."""
     b = {(int(r["n"]), int(r["function"])): r for r in before if r["method"] == "minimize"}
     a = {(int(r["n"]), int(r["function"])): r for r in after if r["method"] == "minimize"}
     keys = sorted(set(b) & set(a))
     if not keys:
-        return ["(no earlier bbob-largescale runs in the run directory)"]
+        return ["(no runs of the variant on bbob-largescale)"]
     lines = [
-        "| n | f | before: best - f_opt (targets; evaluations) | after: best - f_opt (targets; evaluations) |",
+        "| n | f | default: best - f_opt (targets; evaluations) | tried: best - f_opt (targets; evaluations) |",
         "|---|---|---|---|",
     ]
 
@@ -297,6 +310,21 @@ def bbob_tables(rows: list[Row]) -> list[str]:
     return lines
 
 
+def bbob_missing(rows: list[Row]) -> list[str]:
+    """The bbob-largescale runs of ``scripts/large-scale``'s grid that are not in ``rows``."""
+    grid = {n: list(range(1, 25)) for n in (20, 40, 80, 160)}
+    grid[320] = [2, 1, 10, 8, 12, 7, 15]
+    have = {(r["method"], int(r["n"]), int(r["function"])) for r in rows}
+    out = []
+    for n, functions in grid.items():
+        for method in ("minimize", "sepcma"):
+            lost = [f for f in functions if (method, n, f) not in have]
+            if lost:
+                name = "`minimize`" if method == "minimize" else "sep-CMA-ES"
+                out.append(f"bbob-largescale, {name}, n = {n}: f" + ", f".join(map(str, lost)))
+    return out
+
+
 def main() -> None:
     out, page, command = sys.argv[1], sys.argv[2], sys.argv[3]
     rows = read(sorted(glob.glob(os.path.join(out, "texture-*.csv"))))
@@ -306,21 +334,25 @@ def main() -> None:
     plot(rows, png)
     table, missing = texture_table(rows)
     template = open(os.path.join(os.path.dirname(__file__), "largescale_page.md")).read()
-    before = read(sorted(glob.glob(os.path.join(out, "before-texture*.csv"))))
-    before_bbob = read(sorted(glob.glob(os.path.join(out, "before-bbob*.csv"))))
+    tried = {
+        "median success rule": read(glob.glob(os.path.join(out, "tried-msr-texture*.csv"))),
+        "median success rule and sep-CMA-ES's rates": read(glob.glob(os.path.join(out, "tried-msr-rates-texture*.csv"))),
+    }
+    tried = {k: v for k, v in tried.items() if v}
+    tried_bbob = read(sorted(glob.glob(os.path.join(out, "tried-msr-bbob*.csv"))))
     overhead_path = os.path.join(out, "overhead.csv")
     text = template.format(
         command=command,
         time_scales="\n".join(time_scales()),
-        before_after="\n".join(before_after(before, rows)) if before else "(no earlier runs in the run directory)",
-        bbob_before_after="\n".join(bbob_before_after(before_bbob, bbob)),
+        tried="\n".join(tried_table(rows, tried)) if tried else "(no variant ran)",
+        bbob_tried="\n".join(bbob_before_after(bbob, tried_bbob)),
         overhead="\n".join(overhead(read([overhead_path]) if os.path.exists(overhead_path) else [])),
         table="\n".join(table),
         plot=os.path.basename(png),
         never_worse="\n".join(never_worse(rows)),
         seconds="\n".join(seconds_per_evaluation(rows)),
         bbob="\n".join(bbob_tables(bbob)),
-        missing="\n".join(f"- {m}" for m in missing) or "- nothing: every cell of the grid ran",
+        missing="\n".join(f"- {m}" for m in missing + bbob_missing(bbob)) or "- nothing: every run of the grid ran",
     )
     with open(page, "w") as f:
         f.write(text)
