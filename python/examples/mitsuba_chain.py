@@ -154,15 +154,19 @@ class ChainTwin:
         return self._lin
 
     def _numbers(self, theta_dr, theta: np.ndarray, jac_scale: float = 1.0):
-        """e = e(theta0) + J (theta - theta0) as a Dr.Jit Float (differentiable in theta_dr)."""
+        """e = e(theta0) + J (theta - theta0) as a Dr.Jit Float (differentiable in theta_dr);
+        ``jac_scale`` scales its derivative, not its value (the test's broken chain rule)."""
         dr, mi = self.dr, self.mi
         t0, e0, jac = self.linearisation(theta)
         rows, cols = np.nonzero(jac)
         e = mi.Float(e0.astype(np.float32))
         if rows.size:
             d = theta_dr - mi.Float(t0.astype(np.float32))
+            if jac_scale != 1.0:
+                # the same value, the derivative jac_scale x J: adds (jac_scale - 1) J (theta - theta's value)
+                d = d + (jac_scale - 1.0) * (theta_dr - mi.Float(theta.astype(np.float32)))
             vals = dr.gather(mi.Float, d, mi.UInt32(cols.astype(np.uint32))) * mi.Float(
-                (jac_scale * jac[rows, cols]).astype(np.float32))
+                jac[rows, cols].astype(np.float32))
             dr.scatter_reduce(dr.ReduceOp.Add, e, vals, mi.UInt32(rows.astype(np.uint32)))
         return e
 
@@ -225,16 +229,19 @@ class ChainTwin:
         img = self.mi.render(self.scene, seed=int(seed) & 0xFFFFFFFF, spp=self.spp)
         return np.array(img, dtype=np.float64)
 
-    def loss_and_grad(self, theta: np.ndarray, reference, seed: int,
-                      jac_scale: float = 1.0) -> tuple[float, np.ndarray, np.ndarray]:
+    def loss_and_grad(self, theta: np.ndarray, reference, seed: int, jac_scale: float = 1.0,
+                      seed_grad: int | None = None) -> tuple[float, np.ndarray, np.ndarray]:
         """(image MSE, dL/dtheta, the image) at theta; ``jac_scale`` != 1 breaks the chain
-        rule on purpose (the test's negative control)."""
+        rule on purpose (the test's negative control). ``seed_grad``: the seed of Mitsuba's
+        adjoint pass (None: Mitsuba's default, decorrelated from ``seed``, which estimates the
+        gradient of the mean image's loss; ``seed``: the derivative of this very render's loss)."""
         dr, mi = self.dr, self.mi
         theta = np.asarray(theta, dtype=np.float64)
         theta_dr = mi.Float(theta.astype(np.float32))
         dr.enable_grad(theta_dr)
         self._write(self._numbers(theta_dr, theta, jac_scale))
-        img = mi.render(self.scene, self.params, seed=int(seed) & 0xFFFFFFFF, spp=self.spp)
+        img = mi.render(self.scene, self.params, seed=int(seed) & 0xFFFFFFFF, spp=self.spp,
+                        seed_grad=0 if seed_grad is None else int(seed_grad) & 0xFFFFFFFF)
         loss = dr.mean(dr.square(img - reference), axis=None)
         dr.backward(loss)
         grad = np.array(dr.grad(theta_dr), dtype=np.float64)
@@ -271,13 +278,14 @@ class TextureTwin:
         self._set(theta)
         return np.array(self.mi.render(self.scene, seed=int(seed) & 0xFFFFFFFF, spp=self.spp), dtype=np.float64)
 
-    def loss_and_grad(self, theta: np.ndarray, reference, seed: int,
-                      jac_scale: float = 1.0) -> tuple[float, np.ndarray, np.ndarray]:
+    def loss_and_grad(self, theta: np.ndarray, reference, seed: int, jac_scale: float = 1.0,
+                      seed_grad: int | None = None) -> tuple[float, np.ndarray, np.ndarray]:
         dr, mi = self.dr, self.mi
         data = self._set(theta)
         dr.enable_grad(data)
         self.params.update()
-        img = mi.render(self.scene, self.params, seed=int(seed) & 0xFFFFFFFF, spp=self.spp)
+        img = mi.render(self.scene, self.params, seed=int(seed) & 0xFFFFFFFF, spp=self.spp,
+                        seed_grad=0 if seed_grad is None else int(seed_grad) & 0xFFFFFFFF)
         loss = dr.mean(dr.square(img - reference), axis=None)
         dr.backward(loss)
         grad = jac_scale * np.array(dr.grad(data), dtype=np.float64)

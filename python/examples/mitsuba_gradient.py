@@ -200,7 +200,8 @@ def main(argv: list[str] | None = None) -> int:
     if a.page or a.page_only:
         import mitsuba_gradient_page as page
 
-        page.write(out, " ".join(["mitsuba_gradient.py"] + (argv if argv is not None else sys.argv[1:])))
+        args = [x for x in (argv if argv is not None else sys.argv[1:]) if x not in ("--page", "--page-only")]
+        page.write(out, " ".join(["mitsuba_gradient.py"] + args + ["--page"]))
     return 0
 
 
