@@ -191,9 +191,13 @@ def _images(out: Path, per_task: dict[str, tuple[list, list, list]]) -> list[str
 
 
 def _missing(per_task: dict[str, tuple[list, list, list]], command: str) -> list[str]:
+    short = [f"{t} seed {r['seed']} ({r['iterations']} of {max(int(q['iterations']) for q in runs)})"
+             for t, (runs, _, _) in per_task.items() for r in runs
+             if int(r["iterations"]) < max(int(q["iterations"]) for q in runs)]
+    lines = ["", f"Stopped early by `--stop-at` (iterations done): {', '.join(short)}."] if short else []
     done = {(t, int(r["seed"])) for t, (runs, _, _) in per_task.items() for r in runs}
     missing = [f"{t} seed {s}" for t in TASKS for s in (0, 1, 2) if (t, s) not in done]
     if not missing:
-        return []
-    return ["", f"Not run (out of time on the shared machine): {', '.join(missing)}. The same command "
+        return lines
+    return lines + ["", f"Not run (out of time on the shared machine): {', '.join(missing)}. The same command "
             f"runs only what is missing: `target/venv/bin/python python/examples/{command}`."]
