@@ -98,6 +98,7 @@ impl<F> fmt::Debug for Minimizer<F> {
             .field("metric", &o.metric)
             .field("strategy", &o.strategy)
             .field("polish", &o.polish)
+            .field("stall", &o.stall)
             .finish_non_exhaustive()
     }
 }
@@ -199,6 +200,30 @@ impl<F> Minimizer<F> {
         /// # Ok::<(), plateau_free::Error>(())
         /// ```
         polish(fraction: f64) => options.polish = fraction;
+
+        /// Ends the run when the best value has not improved over the last `window` of the
+        /// budget (a fraction in `(0, 1]`; [`crate::STALL_WINDOW`] is the tested choice), the
+        /// rule [`crate::Stall`] with no tolerance: [`Stop::Stalled`]. Default: off, the budget
+        /// alone ends the run. The budget stays the ceiling. The rule sees only the values: the
+        /// adaptive search is judged from its first generation; with [`Strategy::Paper`], the
+        /// loop runs its whole schedule (its annealing is planned over its share of the budget)
+        /// and the polish is judged from the hand-over.
+        ///
+        /// ```
+        /// use plateau_free::{Minimizer, Stop, STALL_WINDOW};
+        ///
+        /// // A floor: every point with |x| < 1 is as good as the optimum.
+        /// let f = |x: &[f64]| (x[0].abs() - 1.0).max(0.0);
+        /// let best = Minimizer::new(f)
+        ///     .budget(5000)
+        ///     .stop_when_stalled(STALL_WINDOW)
+        ///     .run(&[8.0])?;
+        /// assert_eq!(best.stop, Stop::Stalled);
+        /// assert_eq!(best.fun, 0.0);
+        /// assert!(best.evaluations < 5000);
+        /// # Ok::<(), plateau_free::Error>(())
+        /// ```
+        stop_when_stalled(window: f64) => options.stall = Some(window);
     }
 
     /// The objective.

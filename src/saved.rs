@@ -82,6 +82,27 @@ pub(crate) mod floats {
     }
 }
 
+/// `#[serde(with = "float_pairs")]` for the stop rule's marks `(evaluations, best)`, whose
+/// best may be infinite before the first finite value.
+pub(crate) mod float_pairs {
+    use super::*;
+    use std::collections::VecDeque;
+
+    pub(crate) fn serialize<S: Serializer>(
+        v: &VecDeque<(usize, f64)>,
+        s: S,
+    ) -> Result<S::Ok, S::Error> {
+        s.collect_seq(v.iter().map(|&(e, b)| (e, Float(b))))
+    }
+
+    pub(crate) fn deserialize<'de, D: Deserializer<'de>>(
+        d: D,
+    ) -> Result<VecDeque<(usize, f64)>, D::Error> {
+        let v: Vec<(usize, Float)> = Vec::deserialize(d)?;
+        Ok(v.into_iter().map(|(e, b)| (e, b.0)).collect())
+    }
+}
+
 /// `#[serde(with = "float_box")]` for a box `Option<(lower, upper)>`, whose sides may be
 /// infinite.
 pub(crate) mod float_box {

@@ -229,7 +229,9 @@ impl AskTell {
     pub(crate) fn new(options: Options, x0: &[f64]) -> Result<AskTell, Error> {
         let budget = options.check(x0)?;
         let method = match options.strategy {
-            Strategy::Adaptive => Method::Adaptive(Box::new(Adaptive::new(&options, x0))),
+            Strategy::Adaptive => Method::Adaptive(Box::new(
+                Adaptive::new(&options, x0).judged(&options, budget),
+            )),
             Strategy::Paper {
                 samples,
                 lr,

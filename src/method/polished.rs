@@ -177,6 +177,7 @@ impl Polished {
         start.sigma0 = Some(end.sigma);
         start.seed = o.seed ^ POLISH_STREAM;
         let polish = Adaptive::new(&start, &ledger.best.x).counting_from(end.iterations);
+        let polish = polish.judged(o, ledger.budget);
         self.polish = Some(Box::new(polish));
         None
     }

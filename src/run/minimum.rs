@@ -22,6 +22,9 @@ pub enum Stop {
     Target,
     /// The search converged (or stalled) and restarts are off ([`Minimizer::restarts`]).
     Converged,
+    /// The best value stopped improving ([`Minimizer::stop_when_stalled`], the rule
+    /// [`crate::Stall`]).
+    Stalled,
 }
 
 impl fmt::Display for Stop {
@@ -30,6 +33,7 @@ impl fmt::Display for Stop {
             Stop::Budget => "budget spent",
             Stop::Target => "target reached",
             Stop::Converged => "converged",
+            Stop::Stalled => "stalled",
         })
     }
 }

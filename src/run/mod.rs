@@ -6,12 +6,14 @@
 //!   spent, the best point seen);
 //! - `history.rs`: what the paper's loop gives back and continues from ([`History`],
 //!   [`OptimizerState`], [`RunError`]);
-//! - `ask.rs`: the points of one ask ([`Ask`]) and the checks of told values.
+//! - `ask.rs`: the points of one ask ([`Ask`]) and the checks of told values;
+//! - `stall.rs`: the stop rule ([`Stall`]): a run ends when its best value stopped improving.
 
 mod ask;
 mod history;
 mod minimum;
 mod options;
+mod stall;
 
 pub(crate) use ask::count;
 pub use ask::Ask;
@@ -20,3 +22,5 @@ pub(crate) use minimum::{Best, Ledger};
 pub use minimum::{Minimum, Stop};
 pub(crate) use options::Options;
 pub use options::{Metric, Strategy, FULL_METRIC_MAX_DIM};
+pub(crate) use stall::check_fraction;
+pub use stall::{Stall, STALL_WINDOW};

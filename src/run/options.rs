@@ -72,6 +72,10 @@ pub(crate) struct Options {
     pub(crate) restart_from_best: bool,
     pub(crate) strategy: Strategy,
     pub(crate) polish: f64,
+    /// [`crate::Minimizer::stop_when_stalled`]'s window, a fraction of the budget (`None`:
+    /// the budget alone ends the run).
+    #[cfg_attr(feature = "serde", serde(default, with = "crate::saved::float_option"))]
+    pub(crate) stall: Option<f64>,
 }
 
 impl Default for Options {
@@ -90,6 +94,7 @@ impl Default for Options {
             restart_from_best: true,
             strategy: Strategy::Adaptive,
             polish: 0.0,
+            stall: None,
         }
     }
 }
@@ -167,6 +172,9 @@ impl Options {
                 value: self.polish.into(),
                 reason: "polishes the paper's loop: it needs Strategy::Paper",
             });
+        }
+        if let Some(fraction) = self.stall {
+            super::check_fraction(fraction)?;
         }
         if let Strategy::Paper {
             samples,

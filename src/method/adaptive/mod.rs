@@ -11,7 +11,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 
 use crate::error::Error;
 use crate::objective::Points;
-use crate::run::{Ask, Ledger, Metric, Minimum, Options, Stop, FULL_METRIC_MAX_DIM};
+use crate::run::{Ask, Ledger, Metric, Minimum, Options, Stall, Stop, FULL_METRIC_MAX_DIM};
 use gaussian::{rng, Params, SearchGaussian};
 
 /// The adaptive search between asks: `Minimizer`'s loop over runs and generations, unrolled.
@@ -33,6 +33,10 @@ pub(crate) struct Adaptive {
     #[cfg_attr(feature = "serde", serde(with = "crate::saved::floats"))]
     points: Vec<f64>,
     seeds: Vec<u64>,
+    /// The stop rule ([`crate::Minimizer::stop_when_stalled`]), fed each generation's
+    /// smallest value.
+    #[cfg_attr(feature = "serde", serde(default))]
+    stall: Option<Stall>,
 }
 
 impl Adaptive {
@@ -74,7 +78,16 @@ impl Adaptive {
             asked: None,
             points: Vec::new(),
             seeds: Vec::new(),
+            stall: None,
         }
+    }
+
+    /// The same search judged by the stop rule of `o` (if any), whose window is a fraction
+    /// of `budget`, from its first generation.
+    /// (The fraction was checked with the options.)
+    pub(crate) fn judged(mut self, o: &Options, budget: usize) -> Adaptive {
+        self.stall = o.stall.map(|f| Stall::checked(f, budget));
+        self
     }
 
     /// The same search counting its iterations on from `iterations` (the polish continues
@@ -96,6 +109,9 @@ impl Adaptive {
         len("adaptive points", self.points.len(), whole)?;
         if let Some(dist) = &self.dist {
             dist.check(n)?;
+        }
+        if let Some(stall) = &self.stall {
+            stall.check()?;
         }
         if let Some(ys) = &self.asked {
             let Some(dist) = &self.dist else {
@@ -189,6 +205,13 @@ impl Adaptive {
         }
         if ledger.evaluations >= ledger.budget || values.len() < dist.p.lambda {
             return Ok(end(Stop::Budget, dist.sigma));
+        }
+        if let Some(stall) = &mut self.stall {
+            // Told values are finite (checked by `take`).
+            let smallest = values.iter().copied().fold(f64::INFINITY, f64::min);
+            if stall.observe(values.len(), smallest) {
+                return Ok(end(Stop::Stalled, dist.sigma));
+            }
         }
         let ended = dist.update(ys, values).is_some();
         let sigma = dist.sigma;

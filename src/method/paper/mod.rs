@@ -17,7 +17,7 @@ use crate::anneal::Annealer;
 use crate::check;
 use crate::error::Error;
 use crate::estimator::Estimate;
-use crate::run::{History, HistoryKeep, OptimizerState, RunError};
+use crate::run::{check_fraction, History, HistoryKeep, OptimizerState, RunError, Stall};
 // For the documentation's links only.
 #[cfg(doc)]
 use crate::GradientEstimator;
@@ -43,6 +43,14 @@ pub struct Optimizer {
     iterations: usize,
     record_theta: bool,
     keep: HistoryKeep,
+    /// [`Optimizer::stop_when_stalled`]'s window (a fraction of the run's evaluations), the
+    /// rule once it judges (past the schedule), and whether it ended the run.
+    #[cfg_attr(feature = "serde", serde(default, with = "crate::saved::float_option"))]
+    stall_window: Option<f64>,
+    #[cfg_attr(feature = "serde", serde(default))]
+    stall: Option<Stall>,
+    #[cfg_attr(feature = "serde", serde(default))]
+    stalled: bool,
 }
 
 impl Optimizer {
@@ -55,7 +63,48 @@ impl Optimizer {
             annealer,
             record_theta: false,
             keep: HistoryKeep::default(),
+            stall_window: None,
+            stall: None,
+            stalled: false,
         }
+    }
+
+    /// Ends the loop when the mean value of its estimates has not improved over the last
+    /// `window` of its evaluations (a fraction in `(0, 1]` of iterations x evaluations per
+    /// estimate; [`crate::STALL_WINDOW`] is the tested choice): the rule [`Stall`] fed each
+    /// estimate's mean value. Default: off. It judges only the iterations past the annealing
+    /// schedule ([`Optimizer::iterations`] beyond [`Annealer::iterations`]): within the
+    /// schedule the loss falls because the spread is annealed, and an early stop would skip
+    /// the annealing planned over the whole run. A run continued from a state
+    /// ([`Optimizer::minimize_from`]) judges afresh from there.
+    ///
+    /// ```
+    /// use plateau_free::{Adam, Annealer, Optimizer, PlateauFreeGradient};
+    ///
+    /// // A floor: |x| < 1 is optimal. 100 iterations of schedule, up to 900 more past it.
+    /// let f = |x: &[f64]| (x[0].abs() - 1.0).max(0.0);
+    /// let mut grad = PlateauFreeGradient::new(f).samples(4).seed(2);
+    /// let mut opt = Optimizer::new(Adam::new(0.1)?, Annealer::paper(0.5, 100)?)
+    ///     .iterations(1000)
+    ///     .stop_when_stalled(0.1)?;
+    /// let history = opt.minimize(&mut grad, &[3.0])?;
+    /// assert!(opt.stalled());
+    /// assert!(history.iterations() < 1000);
+    /// assert!(history.last_theta().unwrap()[0].abs() < 1.0);
+    /// # Ok::<(), plateau_free::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// A window outside `(0, 1]` ([`Error::InvalidParameter`]).
+    pub fn stop_when_stalled(mut self, window: f64) -> Result<Self, Error> {
+        check_fraction(window)?;
+        self.stall_window = Some(window);
+        Ok(self)
+    }
+
+    /// Whether the stop rule ([`Optimizer::stop_when_stalled`]) ended the last run.
+    pub fn stalled(&self) -> bool {
+        self.stalled
     }
 
     setters! {
@@ -142,6 +191,8 @@ impl Optimizer {
             mut history,
         } = state;
         history.stopped_early = false;
+        self.stall = None;
+        self.stalled = false;
         let progress = Progress {
             iteration,
             theta,
@@ -158,7 +209,8 @@ impl Optimizer {
 
     /// The spread of the next iteration, or `None` when the run is complete.
     pub(crate) fn next_sigma(&self, progress: &Progress) -> Option<f64> {
-        (progress.iteration < self.iterations).then(|| self.annealer.sigma(progress.iteration))
+        (!self.stalled && progress.iteration < self.iterations)
+            .then(|| self.annealer.sigma(progress.iteration))
     }
 
     /// Completes an iteration: Adam's step along the estimate, and the record. On error
@@ -179,8 +231,24 @@ impl Optimizer {
             _ => history.theta.push(progress.theta.clone()),
         }
         history.trim(self.keep, false);
+        self.judge(progress.iteration, estimate);
         progress.iteration += 1;
         Ok(())
+    }
+
+    /// The stop rule on an iteration's estimate, past the schedule.
+    fn judge(&mut self, iteration: usize, estimate: &Estimate) {
+        let Some(fraction) = self.stall_window else {
+            return;
+        };
+        if iteration < self.annealer.iterations() {
+            return;
+        }
+        let evaluations = self.iterations.saturating_mul(estimate.evaluations);
+        let rule = self
+            .stall
+            .get_or_insert_with(|| Stall::checked(fraction, evaluations));
+        self.stalled |= rule.observe(estimate.evaluations, estimate.mean_value);
     }
 
     /// The state of a run at `progress` whose streams stand at `position`.

@@ -11,6 +11,7 @@ mod optimize;
 mod point;
 mod render;
 mod seeds;
+mod stopping;
 mod summarize;
 mod timings;
 mod values;
@@ -52,6 +53,10 @@ enum Command {
     /// Several seeds studies (directories of runs of `all --seeds K`) side by side: each
     /// seed's parameter MSE per method, how many reach the paper's, median, range, seconds.
     Seeds(seeds::Args),
+    /// The stop rule (--stop-when-stalled) replayed on finished full-length runs without
+    /// rendering: renders at the stop against the budget, parameter MSE at the stop against
+    /// at the end.
+    Stopping(stopping::Args),
     /// Median render time of every task at its defaults (target parameters, seed 0, scene
     /// set-up excluded), as a markdown table.
     Timings(timings::Args),
@@ -219,6 +224,7 @@ fn run_cli(cli: Cli, matches: &ArgMatches) -> Result<()> {
         Command::All(args) => all::run(args),
         Command::Summarize(args) => summarize::run(args),
         Command::Seeds(args) => seeds::run(args),
+        Command::Stopping(args) => stopping::run(args),
         Command::Timings(args) => timings::run(args),
         Command::Landscape(args) => landscape::run(args),
         Command::Experiment(args) => experiment::run(args),

@@ -64,6 +64,14 @@ pub(super) fn scale(s: &str) -> Result<f64, String> {
         .ok_or_else(|| format!("allowed: a finite number > 0 and <= {max}"))
 }
 
+/// The stop rule's window, a fraction of the budget in (0, 1].
+pub(super) fn fraction(s: &str) -> Result<f64, String> {
+    finite(s)
+        .ok()
+        .filter(|v| *v > 0.0 && *v <= 1.0)
+        .ok_or_else(|| "allowed: a fraction of the budget, > 0 and <= 1".into())
+}
+
 /// A horizontal field of view in degrees: a pinhole camera sees less than half the sphere.
 pub(super) fn fov(s: &str) -> Result<f64, String> {
     finite(s)

@@ -22,7 +22,7 @@ use std::cell::{Cell, RefCell};
 use std::panic::{self, AssertUnwindSafe};
 use std::time::{Duration, Instant};
 
-use plateau_free::{Minimizer, Objective, Points, Strategy};
+use plateau_free::{Minimizer, Objective, Points, Stop as LibraryStop, Strategy};
 
 use super::{progress_bar, Ended, Method, Progress, Row, Run};
 use crate::report::Result;
@@ -31,6 +31,15 @@ use crate::tasks::param_mse;
 /// `--method polished`: the share of the evaluations that the adaptive search gets after the
 /// paper's loop (one value for every task: `docs/convergence.md`, table 8).
 const POLISH: f64 = 0.25;
+
+/// The first row of the polish in a polished run of `budget` evaluations with `samples` per
+/// estimate: the loop's iterations (on its share of the budget, the start and its final
+/// evaluation apart, as `plateau_free::Strategy::Paper` counts them), then the final
+/// evaluation's row.
+pub(super) fn polish_starts_at(budget: usize, samples: usize) -> usize {
+    let loop_budget = budget - (budget as f64 * POLISH).floor() as usize;
+    loop_budget.saturating_sub(2) / samples.max(1) + 1
+}
 
 /// How a run ended, its best point, its history, six snapshots for the progress strip and the
 /// optimisation time: what both methods hand to the outputs.
@@ -116,12 +125,17 @@ where
     if let Some((lower, upper)) = task.bounds() {
         minimizer = minimizer.bounds(lower, upper);
     }
+    if let Some(window) = s.stall {
+        minimizer = minimizer.stop_when_stalled(window);
+    }
     let ran = panic::catch_unwind(AssertUnwindSafe(|| minimizer.run(start)));
     drop(minimizer);
+    let mut stalled = false;
     let (iterations, evaluations, best, interrupted) = match ran {
         Ok(minimum) => {
             let minimum = minimum?;
             finished = true;
+            stalled = minimum.stop == LibraryStop::Stalled;
             (minimum.iterations, minimum.evaluations, minimum.x, false)
         }
         Err(payload) => match payload.downcast::<Stop>() {
@@ -155,7 +169,7 @@ where
         iterations,
         evaluations,
         renders: objective.log.borrow().len(),
-        stopped_early: false,
+        stopped_early: stalled,
         interrupted,
     };
     Ok((

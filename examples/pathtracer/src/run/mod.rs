@@ -15,6 +15,7 @@ mod outcome;
 mod outputs;
 mod recount;
 mod settings;
+mod stall_replay;
 
 use std::cell::Cell;
 use std::ops::ControlFlow;
@@ -32,6 +33,7 @@ pub use checkpoint::{Build, Checkpoint, CheckpointError, Every, Progress};
 pub use outcome::{renders_to, write_history, Outcome, Row, Summary};
 pub use recount::{loop_renders, recount};
 pub use settings::{eval_every, Crn, Method, Settings, CURVE_POINTS, MAX_SAMPLES, MAX_SCALE};
+pub use stall_replay::{replay as replay_stall, Replayed};
 
 use crate::render::Image;
 use crate::report::Result;
@@ -468,7 +470,11 @@ pub fn optimizer(task: &Task, s: &Settings) -> Result<Optimizer> {
     };
     // The loop keeps only the last theta; the recorder keeps six snapshots for the progress
     // strip (a 49,152-parameter theta per iteration would be 1.5 GB over 4000 iterations).
-    Ok(Optimizer::new(adam, annealer).record_theta(false))
+    let mut optimizer = Optimizer::new(adam, annealer).record_theta(false);
+    if let Some(window) = s.stall {
+        optimizer = optimizer.stop_when_stalled(window)?;
+    }
+    Ok(optimizer)
 }
 
 /// What the loop records after each iteration: a row of the history, six snapshots of theta

@@ -96,6 +96,11 @@ pub struct Settings {
     pub eval_every: usize,
     /// Stop when the optimisation (renders for the gradient included) has used this much time.
     pub budget_seconds: Option<f64>,
+    /// The stop rule (`plateau_free::Stall`): end the run when the best value has not
+    /// improved over this fraction of the N x iterations evaluations (`None`: the budget
+    /// alone ends it). Runs written before the rule read as `None`.
+    #[serde(default)]
+    pub stall: Option<f64>,
 }
 
 impl Settings {
@@ -119,6 +124,7 @@ impl Settings {
             scale: None,
             eval_every: eval_every(d.iterations, CURVE_POINTS),
             budget_seconds: None,
+            stall: None,
         }
     }
 
