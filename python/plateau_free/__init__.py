@@ -44,6 +44,7 @@ from ._minimize import minimize
 from ._native import (
     PAPER_SIGMA_MIN,
     PAPER_WARMUP,
+    STALL_WINDOW,
     Adam,
     Annealer,
     FiniteDifference,
@@ -58,6 +59,7 @@ from ._types import Sampling
 __all__ = [
     "PAPER_SIGMA_MIN",
     "PAPER_WARMUP",
+    "STALL_WINDOW",
     "Adam",
     "Annealer",
     "AskTell",

@@ -176,6 +176,7 @@ def ask_tell(
     population: Optional[int] = None,
     restarts: Optional[bool] = None,
     polish: Optional[float] = None,
+    stop_when_stalled: Optional[float] = None,
     iterations: Optional[int] = None,
     lr: Optional[float] = None,
     samples: Optional[int] = None,
@@ -193,7 +194,8 @@ def ask_tell(
     The methods, the options each takes, their defaults and their checks are
     :func:`minimize`'s: ``method='adaptive'`` (the default), ``'plateau'`` -- also spelt
     ``'paper'`` -- the paper's loop, or ``'polished'``, the paper's loop then the adaptive
-    search, with ``polish``; an option of another method is a ValueError naming it. With the
+    search, with ``polish`` (``stop_when_stalled``: adaptive and polished); an option of
+    another method is a ValueError naming it. With the
     same options and seed, ``ask_tell(x0, ...).result`` after the loop below is
     ``minimize(fun, x0, ...)``, bit for bit::
 
@@ -214,7 +216,8 @@ def ask_tell(
     """
     options = dict(
         budget=budget, seed=seed, sigma0=sigma0, bounds=bounds, target=target,
-        population=population, restarts=restarts, polish=polish, iterations=iterations, lr=lr,
+        population=population, restarts=restarts, polish=polish,
+        stop_when_stalled=stop_when_stalled, iterations=iterations, lr=lr,
         samples=samples, sampling=sampling, antithetic=antithetic, orthogonal=orthogonal,
         annealer=annealer, sigma_min=sigma_min, record_x=record_x, keep_history=keep_history,
         final_evaluation=final_evaluation,

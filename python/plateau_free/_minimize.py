@@ -37,6 +37,7 @@ def minimize(
     population: Optional[int] = None,
     restarts: Optional[bool] = None,
     polish: Optional[float] = None,
+    stop_when_stalled: Optional[float] = None,
     iterations: Optional[int] = None,
     lr: Optional[float] = None,
     samples: Optional[int] = None,
@@ -132,6 +133,14 @@ def minimize(
     polish : float, optional
         Polished: the fraction of ``budget``, in ``[0, 1)``, that the adaptive search gets
         after the paper's loop (default 0.25; 0: the loop alone, its best point returned).
+    stop_when_stalled : float, optional
+        Adaptive, polished (``Minimizer::stop_when_stalled``): end the run once the best value
+        has not improved at all over the last ``stop_when_stalled * budget`` evaluations
+        (rounded up), a fraction in ``(0, 1]``; :data:`STALL_WINDOW` (0.2) is the tested
+        choice. Judged after every generation of the adaptive search (polished: from the
+        hand-over, the paper's loop runs its whole share); the result then has status 0 and
+        a message saying it stalled. Default None: off, the budget alone ends the run. Not an
+        option of the paper's loop (``'plateau'``).
     iterations : int, optional
         The paper's loop: iterations to run; default the annealer's length if ``annealer`` is
         an :class:`Annealer`, else as many as ``budget`` pays for, else 400.
@@ -184,6 +193,7 @@ def minimize(
         how the run ended                             success    status
         ============================================  =========  ======
         ``target`` reached; converged (no restarts)   True       0
+        stalled (``stop_when_stalled``)               True       0
         budget spent (adaptive, polished)             False      1
         all iterations done (the paper's loop)        False      1
         the callback returned a true value or raised  False      99
@@ -207,7 +217,8 @@ def minimize(
     options = dict(
         budget=budget, seed=seed, sigma0=sigma0, bounds=bounds, batched=batched, seeded=seeded,
         callback=callback, target=target, population=population, restarts=restarts,
-        polish=polish, iterations=iterations, lr=lr, samples=samples, sampling=sampling,
+        polish=polish, stop_when_stalled=stop_when_stalled, iterations=iterations, lr=lr,
+        samples=samples, sampling=sampling,
         antithetic=antithetic, annealer=annealer, sigma_min=sigma_min, step=step,
         orthogonal=orthogonal, parallel=parallel, record_x=record_x, keep_history=keep_history,
         final_evaluation=final_evaluation, checkpoint=checkpoint,

@@ -10,6 +10,7 @@ import numpy.typing as npt
 __version__: str
 PAPER_SIGMA_MIN: float
 PAPER_WARMUP: float
+STALL_WINDOW: float
 
 _ArrayLike = npt.ArrayLike
 _FloatArray = npt.NDArray[np.float64]
@@ -176,6 +177,7 @@ __all__ = [
     "PAPER_SIGMA_MIN",
     "PAPER_WARMUP",
     "PlateauFreeGradient",
+    "STALL_WINDOW",
     "Spsa",
     "_AskTell",
     "_minimize",
@@ -201,6 +203,7 @@ class _AdaptiveOptions(TypedDict):
     restarts: bool
     paper: tuple[int, float, float] | None
     polish: float | None
+    stall: float | None
 
 class _AskTell:
     """The Rust side of ``plateau_free.AskTell``: an adaptive or paper-loop run, asked and told."""

@@ -89,6 +89,19 @@ def _fraction(name: str, value: Any) -> float:
     return float(value)
 
 
+def _window(name: str, value: Any) -> float:
+    """``stop_when_stalled``: a fraction of the budget in ``(0, 1]`` (NaN fails the test)."""
+    must = (
+        f"{name} = {_show(value)} must be a fraction of the budget in (0, 1] (the window over "
+        "which the best value must improve; plateau_free.STALL_WINDOW = 0.2 is the tested choice)"
+    )
+    if not _is_real(value):
+        raise OptionTypeError(must)
+    if not 0.0 < value <= 1.0:
+        raise ValueError(must)
+    return float(value)
+
+
 def _not_nan(name: str, value: Any) -> float:
     must = f"{name} = {_show(value)} must be a number (not NaN)"
     if not _is_real(value):
@@ -166,6 +179,7 @@ _CHECKS: dict[str, Callable[[str, Any], Any]] = {
     "keep_history": _counter(1, " of iterations"),
     "target": _not_nan,
     "polish": _fraction,
+    "stop_when_stalled": _window,
     "sampling": _sampling,
     "annealer": _annealer,
     "callback": _callable,
@@ -184,7 +198,7 @@ _ALWAYS_CHECKED = ("seed", "batched", "seeded")
 # The options each method takes (besides fun, x0 and method).
 _ADAPTIVE = {
     "budget", "seed", "sigma0", "bounds", "target", "population", "restarts", "batched", "seeded",
-    "callback",
+    "callback", "stop_when_stalled",
 }  # fmt: skip
 _LOOP = {
     "budget", "seed", "bounds", "batched", "seeded", "callback", "iterations", "lr", "record_x",
@@ -398,6 +412,7 @@ def _adaptive_options(
         "restarts": checked.get("restarts", True),
         "paper": paper,
         "polish": polish,
+        "stall": checked.get("stop_when_stalled"),
     }
 
 

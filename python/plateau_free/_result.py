@@ -147,6 +147,7 @@ class History:
 _ENDINGS = {
     "target reached": (True, 0),
     "converged": (True, 0),
+    "stalled": (True, 0),
     "budget spent": (False, 1),
     "iterations done": (False, 1),
     "callback": (False, 99),
@@ -175,6 +176,11 @@ def _adaptive_result(
         message = _callback_message(callback_stop, nit)
     elif stop == "budget spent":
         message = f"budget spent: {nfev} of at most {budget} evaluations; x is the best point seen"
+    elif stop == "stalled":
+        message = (
+            f"stalled: the best value stopped improving (stop_when_stalled), after {nfev} of at "
+            f"most {budget} evaluations; x is the best point seen"
+        )
     return OptimizeResult(
         x=raw["x"],
         fun=float(raw["fun"]),

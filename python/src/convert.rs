@@ -244,6 +244,8 @@ pub(crate) struct AdaptiveOptions {
     paper: Option<(usize, f64, f64)>,
     /// `method='polished'`: `Minimizer::polish`'s fraction of the budget.
     polish: Option<f64>,
+    /// `Minimizer::stop_when_stalled`'s window, a fraction of the budget; None: off.
+    stall: Option<f64>,
 }
 
 impl AdaptiveOptions {
@@ -264,7 +266,8 @@ impl AdaptiveOptions {
                 sigma0,
             })
         });
-        maybe(minimizer, self.polish, RsMinimizer::polish)
+        let minimizer = maybe(minimizer, self.polish, RsMinimizer::polish);
+        maybe(minimizer, self.stall, RsMinimizer::stop_when_stalled)
     }
 }
 

@@ -55,6 +55,31 @@ fn bad_values_exit_2_on_one_line_and_write_nothing() {
     }
 }
 
+/// `all --stop-when-stalled` takes a fraction of the budget in (0, 1]; anything else exits 2
+/// naming the option and the value, before any run.
+#[test]
+fn all_refuses_a_bad_stall_fraction() {
+    for value in ["0", "-0.1", "1.5", "NaN", "often"] {
+        let out = fresh("all-stall");
+        let out_arg = out.display().to_string();
+        let (code, stderr) = run(&[
+            "all",
+            "--tasks",
+            "shadow",
+            "--stop-when-stalled",
+            value,
+            "--out",
+            &out_arg,
+        ]);
+        assert_eq!(code, Some(2), "{value}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{value}: {stderr}");
+        for part in ["--stop-when-stalled", value, "fraction of the budget"] {
+            assert!(stderr.contains(part), "{value}: {part:?} not in {stderr:?}");
+        }
+        assert!(!out.exists(), "{value}: {} was created", out.display());
+    }
+}
+
 #[test]
 fn help_exits_0() {
     let output = Command::new(env!("CARGO_BIN_EXE_pathtracer"))

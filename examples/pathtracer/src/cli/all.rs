@@ -30,6 +30,11 @@ pub(super) struct Args {
     /// polished].
     #[arg(long, value_enum)]
     method: Option<Method>,
+    /// The stop rule of every run (as `optimize --stop-when-stalled`): end a run when its
+    /// best value has not improved over this fraction of its renders (0.2 is the library's
+    /// `STALL_WINDOW`) [default: off].
+    #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = values::fraction)]
+    stop_when_stalled: Option<f64>,
     /// Skip the finite-difference baseline.
     #[arg(long)]
     no_baseline: bool,
@@ -50,7 +55,10 @@ pub(super) fn run(args: Args) -> Result<()> {
             args.quick,
             args.tasks.as_deref(),
             args.seeds,
-            args.method.unwrap_or(Method::TASK_DEFAULT),
+            Runs {
+                method: args.method.unwrap_or(Method::TASK_DEFAULT),
+                stall: args.stop_when_stalled,
+            },
             !args.no_baseline,
             &Limits {
                 stop_after: args.stop_after,
@@ -58,6 +66,12 @@ pub(super) fn run(args: Args) -> Result<()> {
             },
         )
     })
+}
+
+/// What every run of `all` is: its method and its stop rule (`--stop-when-stalled`).
+struct Runs {
+    method: Method,
+    stall: Option<f64>,
 }
 
 /// What a test changes of `all`: when to stop each run, and a change of every run's
@@ -112,19 +126,21 @@ fn all(
     quick: bool,
     only: Option<&[String]>,
     seeds: u64,
-    method: Method,
+    runs: Runs,
     baseline: bool,
     limits: &Limits,
 ) -> Result<()> {
     let command = format!(
-        "cargo run --release -p pathtracer -- all{}{} --method {}{}{} --out {}",
+        "cargo run --release -p pathtracer -- all{}{} --method {}{}{}{} --out {}",
         if quick { " --quick" } else { "" },
         if seeds > 1 {
             format!(" --seeds {seeds}")
         } else {
             String::new()
         },
-        method.as_arg(),
+        runs.method.as_arg(),
+        runs.stall
+            .map_or(String::new(), |f| format!(" --stop-when-stalled {f}")),
         if baseline { "" } else { " --no-baseline" },
         only.map_or(String::new(), |t| format!(" --tasks {}", t.join(","))),
         out.display()
@@ -134,7 +150,8 @@ fn all(
             continue;
         }
         let mut plateau = Settings::defaults(&task);
-        plateau.method = method;
+        plateau.method = runs.method;
+        plateau.stall = runs.stall;
         if quick {
             plateau.iterations = (plateau.iterations / 10).max(20);
             plateau.eval_every = run::eval_every(plateau.iterations, 20);
@@ -220,7 +237,10 @@ mod tests {
                 false,
                 Some(&only),
                 seeds,
-                Method::Plateau,
+                Runs {
+                    method: Method::Plateau,
+                    stall: None,
+                },
                 true,
                 &limits,
             )

@@ -92,7 +92,7 @@ struct RunOptions {
     /// The stop rule: end the run when its best value has not improved over this fraction
     /// of the N x iterations renders (0.2 is the library's `STALL_WINDOW`, tested in
     /// docs/results/stopping.md); the budget stays the ceiling [default: off].
-    #[arg(long, value_name = "FRACTION", value_parser = values::fraction)]
+    #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = values::fraction)]
     stop_when_stalled: Option<f64>,
     /// No progress bar.
     #[arg(long)]
