@@ -286,12 +286,12 @@ impl AdamMoments {
             );
         }
         if let Some(i) = self.m.iter().position(|x| !x.is_finite()) {
-            return bad("adam.m", format!("[{i}] = {:e} is not finite", self.m[i]));
+            return bad("adam.m", format!("[{i}] = {:?} is not finite", self.m[i]));
         }
         if let Some(i) = self.v.iter().position(|x| !(x.is_finite() && *x >= 0.0)) {
             return bad(
                 "adam.v",
-                format!("[{i}] = {:e} is not finite and >= 0", self.v[i]),
+                format!("[{i}] = {:?} is not finite and >= 0", self.v[i]),
             );
         }
         Ok(())

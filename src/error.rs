@@ -11,7 +11,7 @@ pub enum Error {
     EmptyTheta,
 
     /// A coordinate of theta is NaN or infinite.
-    #[error("theta[{index}] = {value:e} is not finite")]
+    #[error("theta[{index}] = {value:?} is not finite")]
     NonFiniteTheta {
         /// The coordinate.
         index: usize,
@@ -20,11 +20,11 @@ pub enum Error {
     },
 
     /// A scalar spread that is not a finite positive number.
-    #[error("sigma = {0:e} must be finite and > 0")]
+    #[error("sigma = {0:?} must be finite and > 0")]
     InvalidSigma(f64),
 
     /// A per-dimension spread that is not a finite positive number.
-    #[error("spreads[{index}] = {value:e} must be finite and > 0")]
+    #[error("spreads[{index}] = {value:?} must be finite and > 0")]
     InvalidSpread {
         /// The coordinate.
         index: usize,
@@ -57,7 +57,7 @@ pub enum Error {
 
     /// A perturbed point overflowed (theta plus its offset is not finite).
     #[error(
-        "perturbed point {sample} has coordinate {index} = {value:e} (theta plus offset overflowed)"
+        "perturbed point {sample} has coordinate {index} = {value:?} (theta plus offset overflowed)"
     )]
     NonFinitePoint {
         /// Which evaluation of the estimate.
@@ -70,7 +70,7 @@ pub enum Error {
 
     /// The objective returned NaN or an infinity.
     #[error(
-        "f returned {value:e} at evaluation {sample}, point {}",
+        "f returned {value:?} at evaluation {sample}, point {}",
         Preview(point)
     )]
     NonFiniteValue {
@@ -84,7 +84,7 @@ pub enum Error {
 
     /// The gradient overflowed: values of f too large for the spread (for example f near
     /// 1e300 with sigma 1e-12). Rescale f or enlarge sigma.
-    #[error("gradient coordinate {index} = {value:e} is not finite: f's values are too large for the spread; rescale f")]
+    #[error("gradient coordinate {index} = {value:?} is not finite: f's values are too large for the spread; rescale f")]
     NonFiniteGradient {
         /// The coordinate.
         index: usize,
@@ -128,7 +128,7 @@ pub enum Error {
 
     /// An Adam step would carry a coordinate of theta past the largest finite number (a
     /// learning rate too large for theta's scale). Nothing was changed.
-    #[error("the step would overflow theta[{index}] = {theta:e} to {value:e}; reduce lr")]
+    #[error("the step would overflow theta[{index}] = {theta:?} to {value:?}; reduce lr")]
     StepOverflow {
         /// The coordinate.
         index: usize,
@@ -220,7 +220,7 @@ pub enum Error {
     },
 
     /// A lower bound above its upper bound.
-    #[error("bounds[{index}]: lower {lower:e} > upper {upper:e} (or not a number)")]
+    #[error("bounds[{index}]: lower {lower:?} > upper {upper:?} (or not a number)")]
     InvalidBounds {
         /// The coordinate.
         index: usize,
@@ -292,7 +292,8 @@ impl From<u64> for ParameterValue {
     }
 }
 
-/// Shows at most four coordinates, in `{:e}` form, and the count: a point may have a million
+/// Shows at most four coordinates, each as written (`{:?}`: the shortest text that reads back
+/// to the same bits, as [`ParameterValue`]), and the count: a point may have a million
 /// coordinates and a coordinate 300 digits.
 struct Preview<'a>(&'a [f64]);
 
@@ -304,7 +305,7 @@ impl fmt::Display for Preview<'_> {
             if i > 0 {
                 write!(f, ", ")?;
             }
-            write!(f, "{x:e}")?;
+            write!(f, "{x:?}")?;
         }
         if self.0.len() > SHOWN {
             write!(f, ", ... ({} coordinates)", self.0.len())?;

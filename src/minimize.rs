@@ -149,7 +149,9 @@ impl<F> Minimizer<F> {
         /// must lie inside it. The bounds must be finite.
         bounds(lower: Vec<f64>, upper: Vec<f64>) => options.bounds = Some((lower, upper));
 
-        /// Stop as soon as `f` reaches `target` or below.
+        /// Stop as soon as `f` reaches `target` or below: after the iteration (the adaptive
+        /// search's generation, the paper loop's gradient estimate) that saw such a value,
+        /// with [`Stop::Target`] and no polish.
         target(target: f64) => options.target = Some(target);
 
         /// The population of the first run (default `4 + floor(3 ln n)`); each restart doubles it.

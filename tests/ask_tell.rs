@@ -779,3 +779,48 @@ fn a_paper_budget_too_small_for_an_iteration_asks_for_the_start_alone() {
         .unwrap();
     assert_eq!(called, best);
 }
+
+/// The paper's loop stops at its target as the adaptive search does: after the estimate whose
+/// points first reach it, with no final evaluation and no polish; the callback form and ask
+/// and tell stop at the same evaluation.
+#[test]
+fn the_paper_loop_stops_after_the_estimate_that_reaches_the_target() {
+    let f = |x: &[f64]| (x[0] - 1.0).powi(2) + (x[1] + 0.5).powi(2);
+    let target = 0.05;
+    for polish in [0.0, 0.5] {
+        let mut run = Minimizer::without_objective()
+            .budget(2002)
+            .seed(4)
+            .strategy(PAPER)
+            .polish(polish)
+            .target(target)
+            .ask_tell(&[0.0, 0.0])
+            .unwrap();
+        let mut first_reached = None;
+        while let Some(ask) = run.ask().unwrap() {
+            let values: Vec<f64> = ask.iter().map(|(x, _)| f(x)).collect();
+            let reached = values.iter().any(|&v| v <= target);
+            run.tell(&values).unwrap();
+            if reached && first_reached.is_none() {
+                first_reached = Some(run.evaluations());
+                assert!(run.is_done(), "the run goes on past its target");
+            }
+        }
+        let told = run.finish().unwrap();
+        assert_eq!(told.stop, Stop::Target, "{told:?}");
+        assert!(told.fun <= target, "{told:?}");
+        assert_eq!(Some(told.evaluations), first_reached);
+        // The start (f = 1.25, above the target), then whole estimates of 4 points.
+        assert_eq!(told.evaluations, 1 + 4 * told.iterations, "{told:?}");
+        assert!(told.evaluations < 2002 / 4, "{told:?}");
+        assert_eq!(f(&told.x), told.fun);
+        let called = Minimizer::new(f)
+            .budget(2002)
+            .seed(4)
+            .strategy(PAPER)
+            .polish(polish)
+            .target(target)
+            .run(&[0.0, 0.0]);
+        assert_eq!(called.as_ref(), Ok(&told), "polish {polish}");
+    }
+}

@@ -213,7 +213,7 @@ fn objective_returning_nan_or_infinity_names_the_point() {
             let text = err.to_string();
             assert!(text.contains(&format!("evaluation {first_bad}")), "{text}");
             assert!(
-                text.contains(&format!("{:e}", seen[first_bad][0])),
+                text.contains(&format!("{:?}", seen[first_bad][0])),
                 "{text}"
             );
         }
@@ -499,5 +499,122 @@ fn messages_show_values_as_written() {
                 .unwrap_err()
         ),
         "x0[1] = 2.0 lies outside the bounds [-1.0, 1.0]"
+    );
+}
+
+/// Every other variant shows its numbers as `InvalidParameter` does: counts as integers, real
+/// numbers in the shortest text that reads back to the same bits (it printed `sigma = -2.5e0`,
+/// `theta[0] = 1e300`, `lower 1e0 > upper 0e0`).
+#[test]
+fn every_variant_shows_its_numbers_as_written() {
+    let rows: Vec<(Error, &str)> =
+        vec![
+        (
+            Error::NonFiniteTheta {
+                index: 2,
+                value: f64::NEG_INFINITY,
+            },
+            "theta[2] = -inf is not finite",
+        ),
+        (
+            Error::InvalidSigma(-2.5),
+            "sigma = -2.5 must be finite and > 0",
+        ),
+        (Error::InvalidSigma(0.0), "sigma = 0.0 must be finite and > 0"),
+        (
+            Error::InvalidSpread {
+                index: 1,
+                value: 1e-320,
+            },
+            "spreads[1] = 1e-320 must be finite and > 0",
+        ),
+        (
+            Error::NonFinitePoint {
+                sample: 3,
+                index: 0,
+                value: f64::INFINITY,
+            },
+            "perturbed point 3 has coordinate 0 = inf (theta plus offset overflowed)",
+        ),
+        (
+            Error::NonFiniteValue {
+                sample: 7,
+                value: f64::NAN,
+                point: vec![0.1, 1.0, -1e300, 2.5, 9.0],
+            },
+            "f returned NaN at evaluation 7, point [0.1, 1.0, -1e300, 2.5, ... (5 coordinates)]",
+        ),
+        (
+            Error::NonFiniteGradient {
+                index: 0,
+                value: f64::MAX,
+            },
+            "gradient coordinate 0 = 1.7976931348623157e308 is not finite: f's values are too \
+             large for the spread; rescale f",
+        ),
+        (
+            Error::StepOverflow {
+                index: 1,
+                theta: 1e308,
+                value: f64::INFINITY,
+            },
+            "the step would overflow theta[1] = 1e308 to inf; reduce lr",
+        ),
+        (
+            Error::InvalidBounds {
+                index: 0,
+                lower: 1.0,
+                upper: 0.0,
+            },
+            "bounds[0]: lower 1.0 > upper 0.0 (or not a number)",
+        ),
+        (
+            Error::OutsideBounds {
+                what: "x0",
+                index: 0,
+                value: 0.3,
+                lower: 0.5,
+                upper: 1.0,
+            },
+            "x0[0] = 0.3 lies outside the bounds [0.5, 1.0]",
+        ),
+        (
+            Error::TellCount {
+                expected: 4,
+                got: 0,
+            },
+            "tell got 0 values for 4 asked points",
+        ),
+        (
+            Error::Unfinished {
+                evaluations: 0,
+                budget: 10,
+            },
+            "the run is not finished (0 of at most 10 evaluations told): ask and tell until ask \
+             gives None",
+        ),
+        (
+            Error::LengthMismatch {
+                what: "spreads",
+                expected: 3,
+                got: 0,
+            },
+            "length mismatch: spreads has length 0, expected 3",
+        ),
+    ];
+    for (error, text) in rows {
+        assert_eq!(error.to_string(), text);
+    }
+    // Through the API: a bad start, a bad spread, a saved state with a bad moment.
+    let mut est = PlateauFreeGradient::new(linear);
+    assert_eq!(
+        est.estimate(&[1e300, f64::NAN], 0.5)
+            .unwrap_err()
+            .to_string(),
+        "theta[1] = NaN is not finite"
+    );
+    assert_eq!(
+        est.estimate(&[1.0], 0.0).unwrap_err().to_string(),
+        "sigma = 0.0 must be finite and > 0"
     );
 }

@@ -155,9 +155,16 @@ impl Polished {
         let Some(run) = &mut self.run else {
             return Err(Error::NothingAsked);
         };
+        let sigma = run.sigma().unwrap_or(self.sigma);
         run.tell(values)?;
         // The told points are still in the estimator's buffers.
         ledger.count(run.core.points(n), values);
+        // As the adaptive search: the run ends after the iteration that saw a value at or
+        // below the target, with no final evaluation and no polish.
+        if ledger.target_reached() {
+            let end = ledger.minimum(run.iteration(), 0, sigma, Stop::Target);
+            return Ok(Some(end));
+        }
         Ok(None)
     }
 

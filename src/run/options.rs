@@ -22,7 +22,8 @@ pub enum Strategy {
     /// iterations the budget allows (`(budget - 2) / samples`: the first evaluation is at the
     /// start, the last at the final parameters; a budget too small for an iteration
     /// evaluates the start alone). With bounds, every perturbed point is clamped onto the
-    /// box and every step projected onto it.
+    /// box and every step projected onto it. With [`Minimizer::target`], the loop ends after
+    /// the estimate whose points reached it (no final evaluation, no polish).
     Paper {
         /// `N`, evaluations of `f` per gradient estimate (even).
         samples: usize,
