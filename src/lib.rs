@@ -150,7 +150,7 @@ pub use objective::{Batch, NoObjective, Objective, Points, Seeded};
 pub use optimize::Step;
 pub use run::{
     Ask, History, HistoryKeep, Metric, Minimum, OptimizerState, RunError, Stall, Stop, Strategy,
-    FULL_METRIC_MAX_DIM, STALL_WINDOW,
+    FULL_METRIC_LIMIT, FULL_METRIC_MAX_DIM, STALL_WINDOW,
 };
 pub use sampling::Sampling;
 pub use vector::{

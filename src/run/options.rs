@@ -42,7 +42,8 @@ pub enum Metric {
     #[default]
     Auto,
     /// A full covariance: learns rotated, ill-conditioned metrics; `O(n^2)` per evaluation
-    /// and `O(n^3)` per eigendecomposition (every few iterations).
+    /// and `O(n^3)` per eigendecomposition (every few iterations). Refused above
+    /// [`FULL_METRIC_LIMIT`] dimensions.
     Full,
     /// A diagonal covariance: per-coordinate spreads only, `O(n)` per evaluation (separable
     /// CMA-ES, Ros and Hansen 2008, positive weights only). For large `n`; slow on rotated,
@@ -52,6 +53,12 @@ pub enum Metric {
 
 /// The largest dimension for which [`Metric::Auto`] learns a full covariance.
 pub const FULL_METRIC_MAX_DIM: usize = 200;
+
+/// The largest dimension [`Metric::Full`] accepts. The full metric keeps `n x n` matrices
+/// (the covariance and its eigenvectors: 1.6 GB at this size) and decomposes one every few
+/// iterations (about `n^3` = 10^12 operations here); above it a run would abort on the
+/// allocation or never finish a generation, so it is refused with an error instead.
+pub const FULL_METRIC_LIMIT: usize = 10_000;
 
 /// A [`Minimizer`]'s options: everything but the objective, which is all an ask-and-tell
 /// run needs.
@@ -115,6 +122,13 @@ impl Options {
         }
         if let Some(s) = self.sigma0 {
             check::positive("sigma0", s)?;
+        }
+        if self.metric == Metric::Full && n > FULL_METRIC_LIMIT {
+            return Err(Error::InvalidParameter {
+                name: "dimension",
+                value: n.into(),
+                reason: "above 10000 is too large for Metric::Full (it keeps n x n matrices); use Metric::Diagonal or Metric::Auto",
+            });
         }
         if let Some(t) = self.target {
             if t.is_nan() {
