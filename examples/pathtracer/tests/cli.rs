@@ -80,6 +80,116 @@ fn all_refuses_a_bad_stall_fraction() {
     }
 }
 
+/// `--polish` is refused outside [0, 1) and with any method but polished, by `optimize` and
+/// `all`: exit 2, one line naming it, nothing written.
+#[test]
+fn a_bad_polish_share_is_refused_before_any_work() {
+    let cases: [(&[&str], &str, &str); 6] = [
+        (
+            &["optimize", "shadow", "--polish", "1"],
+            "1",
+            ">= 0 and < 1",
+        ),
+        (
+            &["optimize", "shadow", "--polish", "-0.1"],
+            "-0.1",
+            ">= 0 and < 1",
+        ),
+        (
+            &["all", "--tasks", "shadow", "--polish", "NaN"],
+            "NaN",
+            ">= 0 and < 1",
+        ),
+        (
+            &[
+                "optimize", "shadow", "--method", "plateau", "--polish", "0.5",
+            ],
+            "0.5",
+            "--method polished",
+        ),
+        (
+            &["optimize", "shadow", "--budget", "5", "--polish", "0.5"],
+            "0.5",
+            "--method polished",
+        ),
+        (
+            &[
+                "all", "--tasks", "shadow", "--method", "adaptive", "--polish", "0.5",
+            ],
+            "0.5",
+            "--method polished",
+        ),
+    ];
+    for (args, value, allowed) in cases {
+        let out = fresh("polish");
+        let out_arg = out.display().to_string();
+        let mut line = args.to_vec();
+        line.extend(["--out", &out_arg]);
+        let (code, stderr) = run(&line);
+        assert_eq!(code, Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
+        for part in ["--polish", value, allowed] {
+            assert!(
+                stderr.contains(part),
+                "{args:?}: {part:?} not in {stderr:?}"
+            );
+        }
+        assert!(!out.exists(), "{args:?}: {} was created", out.display());
+    }
+}
+
+/// The renders after which a polished run's loop handed over: its final evaluation's row,
+/// the one at sigma 0.
+fn hand_over(dir: &Path) -> usize {
+    let history = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    let header: Vec<&str> = history.lines().next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (sigma, renders) = (column("sigma"), column("renders"));
+    history
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .find(|row| row[sigma].parse::<f64>().unwrap() == 0.0)
+        .map(|row| row[renders].parse().unwrap())
+        .expect("a row at sigma 0")
+}
+
+/// `--polish 0.5` hands over after half the renders (40 of 80: the start, 19 iterations of 2
+/// and the final evaluation) where the default 0.25 hands over after 60; the summary says the
+/// share, and the table labels the run by it.
+#[test]
+fn the_polish_share_sets_where_the_loop_hands_over() {
+    let mut at = Vec::new();
+    for share in [None, Some("0.5")] {
+        let out = fresh(&format!("polish-at-{}", share.unwrap_or("default")));
+        let out_arg = out.display().to_string();
+        let mut line = vec![
+            "optimize",
+            "shadow",
+            "--scale",
+            "0.125",
+            "--spp",
+            "2",
+            "--iterations",
+            "40",
+            "--method",
+            "polished",
+            "--quiet",
+            "--out",
+            &out_arg,
+        ];
+        line.extend(share.iter().flat_map(|s| ["--polish", *s]));
+        let (code, stderr) = run(&line);
+        assert_eq!(code, Some(0), "{stderr}");
+        at.push(hand_over(&out));
+        let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+        let polish = format!("\"polish\": {}", share.unwrap_or("0.25"));
+        assert!(summary.contains(&polish), "{polish} not in {summary}");
+        let _ = std::fs::remove_dir_all(&out);
+    }
+    assert_eq!(at, [60, 40]);
+}
+
 #[test]
 fn help_exits_0() {
     let output = Command::new(env!("CARGO_BIN_EXE_pathtracer"))
@@ -146,6 +256,17 @@ fn an_interrupted_run_resumed_equals_the_run_left_alone() {
         (
             "polished",
             &["--iterations", "40", "--method", "polished"][..],
+        ),
+        (
+            "polished-half",
+            &[
+                "--iterations",
+                "40",
+                "--method",
+                "polished",
+                "--polish",
+                "0.5",
+            ][..],
         ),
     ] {
         let base: Vec<String> = ["optimize", "shadow", "--scale", "0.125", "--spp", "2"]

@@ -35,6 +35,10 @@ pub(super) struct Args {
     /// `STALL_WINDOW`) [default: off].
     #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = values::fraction)]
     stop_when_stalled: Option<f64>,
+    /// With --method polished (the default): the share of every run's renders that the
+    /// adaptive search gets after the paper's loop (as `optimize --polish`) [default: 0.25].
+    #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = values::share)]
+    polish: Option<f64>,
     /// Skip the finite-difference baseline.
     #[arg(long)]
     no_baseline: bool,
@@ -49,6 +53,13 @@ pub(super) struct Args {
 
 /// Runs every task (or those of `--tasks`), rewriting `results.md` after each.
 pub(super) fn run(args: Args) -> Result<()> {
+    let method = args.method.unwrap_or(Method::TASK_DEFAULT);
+    if let (Some(share), true) = (args.polish, method != Method::Polished) {
+        return Err(super::usage(format!(
+            "--polish {share}: it is the share of --method polished, not of --method {}; allowed: drop --polish, or --method polished",
+            method.as_arg()
+        )));
+    }
     with_threads(args.threads, || {
         all(
             &args.out,
@@ -56,8 +67,9 @@ pub(super) fn run(args: Args) -> Result<()> {
             args.tasks.as_deref(),
             args.seeds,
             Runs {
-                method: args.method.unwrap_or(Method::TASK_DEFAULT),
+                method,
                 stall: args.stop_when_stalled,
+                polish: args.polish,
             },
             !args.no_baseline,
             &Limits {
@@ -68,10 +80,12 @@ pub(super) fn run(args: Args) -> Result<()> {
     })
 }
 
-/// What every run of `all` is: its method and its stop rule (`--stop-when-stalled`).
+/// What every run of `all` is: its method, its stop rule (`--stop-when-stalled`) and, if
+/// given, the polish's share (`--polish`).
 struct Runs {
     method: Method,
     stall: Option<f64>,
+    polish: Option<f64>,
 }
 
 /// What a test changes of `all`: when to stop each run, and a change of every run's
@@ -131,7 +145,7 @@ fn all(
     limits: &Limits,
 ) -> Result<()> {
     let command = format!(
-        "cargo run --release -p pathtracer -- all{}{} --method {}{}{}{} --out {}",
+        "cargo run --release -p pathtracer -- all{}{} --method {}{}{}{}{} --out {}",
         if quick { " --quick" } else { "" },
         if seeds > 1 {
             format!(" --seeds {seeds}")
@@ -141,6 +155,8 @@ fn all(
         runs.method.as_arg(),
         runs.stall
             .map_or(String::new(), |f| format!(" --stop-when-stalled {f}")),
+        runs.polish
+            .map_or(String::new(), |f| format!(" --polish {f}")),
         if baseline { "" } else { " --no-baseline" },
         only.map_or(String::new(), |t| format!(" --tasks {}", t.join(","))),
         out.display()
@@ -152,6 +168,7 @@ fn all(
         let mut plateau = Settings::defaults(&task);
         plateau.method = runs.method;
         plateau.stall = runs.stall;
+        plateau.polish = runs.polish.unwrap_or(plateau.polish);
         if quick {
             plateau.iterations = (plateau.iterations / 10).max(20);
             plateau.eval_every = run::eval_every(plateau.iterations, 20);
@@ -240,6 +257,7 @@ mod tests {
                 Runs {
                     method: Method::Plateau,
                     stall: None,
+                    polish: None,
                 },
                 true,
                 &limits,

@@ -94,6 +94,10 @@ struct RunOptions {
     /// docs/results/stopping.md); the budget stays the ceiling [default: off].
     #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = values::fraction)]
     stop_when_stalled: Option<f64>,
+    /// With --method polished: the share of the renders that the adaptive search gets after
+    /// the paper's loop, whose annealing is compressed to the rest [default: 0.25].
+    #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = values::share)]
+    polish: Option<f64>,
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
@@ -133,6 +137,7 @@ impl RunOptions {
             .unwrap_or(run::eval_every(s.iterations, run::CURVE_POINTS));
         s.budget_seconds = o.budget;
         s.stall = o.stop_when_stalled;
+        s.polish = o.polish.unwrap_or(s.polish);
         s
     }
 }
@@ -140,7 +145,7 @@ impl RunOptions {
 /// The options of `optimize` that set the run's [`Settings`], each with the setting (the
 /// field of `Settings`) it sets. Beside `--resume`, an option written on the command line
 /// must agree with the checkpoint's setting; one not written takes the checkpoint's.
-const SETTING_OPTIONS: [(&str, &str); 17] = [
+const SETTING_OPTIONS: [(&str, &str); 18] = [
     ("iterations", "iterations"),
     ("samples", "samples"),
     ("sigma0", "sigma0"),
@@ -158,6 +163,7 @@ const SETTING_OPTIONS: [(&str, &str); 17] = [
     ("eval_every", "eval_every"),
     ("budget", "budget_seconds"),
     ("stop_when_stalled", "stall"),
+    ("polish", "polish"),
 ];
 
 /// The options of `optimize` that are not settings of the run (what it is, where it writes,
@@ -268,6 +274,14 @@ fn check_combination(opts: &RunOptions, task: &Task) -> Result<()> {
             "--budget with --method {}: the time budget applies to the paper's loop only; allowed: drop --budget, or another --method",
             method.as_arg()
         )));
+    }
+    if let (Some(share), method) = (opts.polish, opts.method()) {
+        if method != Method::Polished {
+            return Err(usage(format!(
+                "--polish {share}: it is the share of --method polished, not of --method {}; allowed: drop --polish, or --method polished",
+                method.as_arg()
+            )));
+        }
     }
     Ok(())
 }

@@ -77,7 +77,7 @@ pub(super) fn method_label(s: &run::Summary) -> String {
     match s.method {
         run::Method::Plateau => format!("paper loop, {:?}", s.sampling).to_lowercase(),
         run::Method::Adaptive => "adaptive search".into(),
-        run::Method::Polished => "paper loop, polished".into(),
+        run::Method::Polished => run::polished_label(s.polish),
         run::Method::Fd => "finite difference".into(),
         run::Method::Spsa => "SPSA".into(),
         run::Method::Image => "image (Gauss-Newton)".into(),

@@ -72,6 +72,14 @@ pub(super) fn fraction(s: &str) -> Result<f64, String> {
         .ok_or_else(|| "allowed: a fraction of the budget, > 0 and <= 1".into())
 }
 
+/// A share of the budget that may be nothing but not all of it (`--polish`).
+pub(super) fn share(s: &str) -> Result<f64, String> {
+    finite(s)
+        .ok()
+        .filter(|v| (0.0..1.0).contains(v))
+        .ok_or_else(|| "allowed: a fraction of the budget, >= 0 and < 1".into())
+}
+
 /// A horizontal field of view in degrees: a pinhole camera sees less than half the sphere.
 pub(super) fn fov(s: &str) -> Result<f64, String> {
     finite(s)

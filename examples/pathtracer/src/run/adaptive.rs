@@ -28,16 +28,12 @@ use super::{progress_bar, Ended, Method, Progress, Row, Run};
 use crate::report::Result;
 use crate::tasks::param_mse;
 
-/// `--method polished`: the share of the evaluations that the adaptive search gets after the
-/// paper's loop (one value for every task: `docs/convergence.md`, table 8).
-const POLISH: f64 = 0.25;
-
 /// The first row of the polish in a polished run of `budget` evaluations with `samples` per
-/// estimate: the loop's iterations (on its share of the budget, the start and its final
-/// evaluation apart, as `plateau_free::Strategy::Paper` counts them), then the final
-/// evaluation's row.
-pub(super) fn polish_starts_at(budget: usize, samples: usize) -> usize {
-    let loop_budget = budget - (budget as f64 * POLISH).floor() as usize;
+/// estimate and the share `polish` for the polish: the loop's iterations (on its share of the
+/// budget, the start and its final evaluation apart, as `plateau_free::Strategy::Paper`
+/// counts them), then the final evaluation's row.
+pub(super) fn polish_starts_at(budget: usize, samples: usize, polish: f64) -> usize {
+    let loop_budget = budget - (budget as f64 * polish).floor() as usize;
     loop_budget.saturating_sub(2) / samples.max(1) + 1
 }
 
@@ -120,7 +116,7 @@ where
                 lr: s.lr,
                 sigma0: s.sigma0,
             })
-            .polish(POLISH);
+            .polish(s.polish);
     }
     if let Some((lower, upper)) = task.bounds() {
         minimizer = minimizer.bounds(lower, upper);

@@ -32,7 +32,9 @@ pub use budget::{plan_for_budget, plan_with_render_time};
 pub use checkpoint::{Build, Checkpoint, CheckpointError, Every, Progress};
 pub use outcome::{renders_to, write_history, Outcome, Row, Summary};
 pub use recount::{loop_renders, recount};
-pub use settings::{eval_every, Crn, Method, Settings, CURVE_POINTS, MAX_SAMPLES, MAX_SCALE};
+pub use settings::{
+    eval_every, polished_label, Crn, Method, Settings, CURVE_POINTS, MAX_SAMPLES, MAX_SCALE, POLISH,
+};
 pub use stall_replay::{replay as replay_stall, Replayed};
 
 use crate::render::Image;
@@ -647,6 +649,7 @@ fn summarize(
         seconds_total,
         stopped_early: run.stopped_early,
         interrupted: run.interrupted,
+        polish: (s.method == Method::Polished).then_some(s.polish),
         final_theta: (task.dim() <= 16).then(|| final_theta.to_vec()),
         target_theta: (task.dim() <= 16).then(|| target.clone()),
     }

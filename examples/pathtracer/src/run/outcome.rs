@@ -110,6 +110,11 @@ pub struct Summary {
     /// Whether Ctrl-C stopped the run before its end (`--resume` continues it).
     #[serde(default)]
     pub interrupted: bool,
+    /// A polished run's share of the renders for the polish (`--polish`); absent for the
+    /// other methods and in polished runs written before the option (they ran with
+    /// [`POLISH`](super::POLISH)).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub polish: Option<f64>,
     /// The final parameters (omitted above 16 dimensions).
     pub final_theta: Option<Vec<f64>>,
     /// The target parameters (omitted above 16 dimensions).

@@ -14,6 +14,11 @@ pub const MAX_SCALE: f64 = 64.0;
 /// N points of the task's dimension, so a count near `usize::MAX` cannot even be allocated.
 pub const MAX_SAMPLES: usize = 1 << 16;
 
+/// `--method polished`: the share of the evaluations that the adaptive search gets after the
+/// paper's loop, unless `--polish` gives another (one value for every task:
+/// `docs/convergence.md`, table 8).
+pub const POLISH: f64 = 0.25;
+
 /// Points on a run's image-error curve at the defaults (`--eval-every` overrides it).
 pub const CURVE_POINTS: usize = 100;
 
@@ -39,8 +44,9 @@ pub enum Method {
     /// given the same evaluations (N x iterations), sigma0, bounds and seed as the paper loop.
     Adaptive,
     /// The paper's loop (plateau-free gradient, Adam, annealing) on the first three quarters
-    /// of the evaluations, then the adaptive search from its best point at its last spread
-    /// (`plateau_free::Minimizer::polish(0.25)` with `Strategy::Paper`).
+    /// of the evaluations (`--polish` sets the last share), then the adaptive search from its
+    /// best point at its last spread (`plateau_free::Minimizer::polish(0.25)` with
+    /// `Strategy::Paper`).
     Polished,
     /// The image, not one number: damped Gauss-Newton on the residual image (rendered minus
     /// reference, per pixel and channel) with the Gaussian-smoothed Jacobian estimated on the
@@ -101,6 +107,16 @@ pub struct Settings {
     /// alone ends it). Runs written before the rule read as `None`.
     #[serde(default)]
     pub stall: Option<f64>,
+    /// With [`Method::Polished`], the share of the evaluations, in `[0, 1)`, that the adaptive
+    /// search gets after the paper's loop. Runs written before the option read as
+    /// [`POLISH`], the share they ran with.
+    #[serde(default = "default_polish")]
+    pub polish: f64,
+}
+
+/// What a run written before `polish` was a setting ran with.
+fn default_polish() -> f64 {
+    POLISH
 }
 
 impl Settings {
@@ -125,6 +141,7 @@ impl Settings {
             eval_every: eval_every(d.iterations, CURVE_POINTS),
             budget_seconds: None,
             stall: None,
+            polish: POLISH,
         }
     }
 
@@ -170,6 +187,16 @@ impl Method {
     }
 }
 
+/// How tables name a polished run with the polish's share `polish` (`None`: a run written
+/// before the share was a setting, which ran with [`POLISH`]): the share only where it is not
+/// the default.
+pub fn polished_label(polish: Option<f64>) -> String {
+    match polish {
+        Some(share) if share != POLISH => format!("paper loop, polished (polish {share})"),
+        _ => "paper loop, polished".into(),
+    }
+}
+
 impl Settings {
     /// A short label for tables and legends.
     pub fn label(&self) -> String {
@@ -177,7 +204,7 @@ impl Settings {
             Method::Fd => "finite difference".into(),
             Method::Spsa => "SPSA".into(),
             Method::Adaptive => "adaptive search".into(),
-            Method::Polished => "paper loop, polished".into(),
+            Method::Polished => polished_label(Some(self.polish)),
             Method::Image => "image (Gauss-Newton)".into(),
             Method::Plateau => {
                 let mut s = format!("{:?}", self.sampling).to_lowercase();
@@ -190,5 +217,29 @@ impl Settings {
                 s
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Settings written before `polish` was one (every committed run's checkpoint) read as
+    /// the share they ran with; the label names a share only where it is not the default.
+    #[test]
+    fn settings_without_a_polish_read_as_the_share_they_ran_with() {
+        let task = crate::tasks::all().into_iter().next().unwrap();
+        let mut s = Settings::defaults(&task);
+        s.polish = 0.5;
+        let mut json = serde_json::to_value(&s).unwrap();
+        json.as_object_mut().unwrap().remove("polish");
+        let read: Settings = serde_json::from_value(json).unwrap();
+        assert_eq!(read.polish, POLISH);
+        assert_eq!(polished_label(None), "paper loop, polished");
+        assert_eq!(polished_label(Some(POLISH)), "paper loop, polished");
+        assert_eq!(
+            polished_label(Some(0.5)),
+            "paper loop, polished (polish 0.5)"
+        );
     }
 }

@@ -79,7 +79,7 @@ pub fn replay(path: &Path, window: f64) -> Result<Replayed> {
     };
     let first = match s.method {
         Method::Adaptive => 0,
-        Method::Polished => adaptive::polish_starts_at(budget, s.samples),
+        Method::Polished => adaptive::polish_starts_at(budget, s.samples, s.polish),
         _ => return Ok(out),
     };
     out.judged = true;
