@@ -156,7 +156,7 @@ fn hand_over(dir: &Path) -> usize {
 
 /// `--polish 0.5` hands over after half the renders (40 of 80: the start, 19 iterations of 2
 /// and the final evaluation) where the default 0.25 hands over after 60; the summary says the
-/// share, and the table labels the run by it.
+/// share.
 #[test]
 fn the_polish_share_sets_where_the_loop_hands_over() {
     let mut at = Vec::new();

@@ -54,12 +54,7 @@ pub(super) struct Args {
 /// Runs every task (or those of `--tasks`), rewriting `results.md` after each.
 pub(super) fn run(args: Args) -> Result<()> {
     let method = args.method.unwrap_or(Method::TASK_DEFAULT);
-    if let (Some(share), true) = (args.polish, method != Method::Polished) {
-        return Err(super::usage(format!(
-            "--polish {share}: it is the share of --method polished, not of --method {}; allowed: drop --polish, or --method polished",
-            method.as_arg()
-        )));
-    }
+    super::check_polish(args.polish, method)?;
     with_threads(args.threads, || {
         all(
             &args.out,

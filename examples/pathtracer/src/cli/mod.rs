@@ -200,6 +200,17 @@ impl std::fmt::Display for Usage {
 
 impl std::error::Error for Usage {}
 
+/// Refuses `--polish` with a method other than polished (`optimize` and `all`), before any work.
+fn check_polish(polish: Option<f64>, method: crate::run::Method) -> Result<()> {
+    match polish {
+        Some(share) if method != crate::run::Method::Polished => Err(usage(format!(
+            "--polish {share}: it is the share of --method polished, not of --method {}; allowed: drop --polish, or --method polished",
+            method.as_arg()
+        ))),
+        _ => Ok(()),
+    }
+}
+
 /// A [`Usage`] error, boxed.
 fn usage(message: String) -> Box<dyn std::error::Error + Send + Sync> {
     Box::new(Usage(message))

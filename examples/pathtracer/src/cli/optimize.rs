@@ -275,15 +275,7 @@ fn check_combination(opts: &RunOptions, task: &Task) -> Result<()> {
             method.as_arg()
         )));
     }
-    if let (Some(share), method) = (opts.polish, opts.method()) {
-        if method != Method::Polished {
-            return Err(usage(format!(
-                "--polish {share}: it is the share of --method polished, not of --method {}; allowed: drop --polish, or --method polished",
-                method.as_arg()
-            )));
-        }
-    }
-    Ok(())
+    super::check_polish(opts.polish, opts.method())
 }
 
 /// Runs `optimize` and prints one line: the errors before and after, the time, the outputs.
