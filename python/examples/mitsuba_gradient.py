@@ -64,7 +64,7 @@ def per_task(text: str, cast) -> dict[str, Any]:
 class Adam:
     """The paper's Adam, with the box projection after each step."""
 
-    def __init__(self, x: np.ndarray, lr: float, box: bool):
+    def __init__(self, x: np.ndarray, lr: float, box: tuple[np.ndarray, np.ndarray] | None):
         self.x, self.lr, self.box = x.astype(np.float64).copy(), lr, box
         self.m, self.v, self.t = np.zeros_like(self.x), np.zeros_like(self.x), 0
 
@@ -74,8 +74,8 @@ class Adam:
         self.v = 0.999 * self.v + 0.001 * g * g
         mhat, vhat = self.m / (1 - 0.9**self.t), self.v / (1 - 0.999**self.t)
         self.x = self.x - self.lr * mhat / (np.sqrt(vhat) + 1e-8)
-        if self.box:
-            self.x = np.clip(self.x, 0.0, 1.0)
+        if self.box is not None:
+            self.x = np.clip(self.x, *self.box)
 
 
 def make_twin(mi, task: str, scale: float | None):
@@ -90,12 +90,14 @@ def one_run(mi, task: str, seed: int, scale: float | None, cap: int | None, out:
             stop_at: float | None = None) -> dict[str, Any]:
     from mitsuba_files import write_csv, write_png
 
+    import mitsuba_twin as mt
+
     twin = make_twin(mi, task, scale)
     d = twin.defaults
     iterations = int(d["iterations"]) if cap is None else min(int(cap), int(d["iterations"]))
     reference = twin.render(twin.target, seed)
     ref = mi.TensorXf(reference.astype(np.float32))
-    adam = Adam(twin.start, float(d["lr"]), bool(d["unit_box"]))
+    adam = Adam(twin.start, float(d["lr"]), mt.task_box(d, twin.start.size))
     rows, times = [], []
     for it in range(iterations):
         if stop_at is not None and time.time() >= stop_at and it > 0:
@@ -107,7 +109,7 @@ def one_run(mi, task: str, seed: int, scale: float | None, cap: int | None, out:
             write_png(mi, image, out / "start.png")
         adam.step(grad.reshape(theta.shape))
         times.append(time.perf_counter() - t0)
-        rows.append(history_row(it, loss, theta, twin.target, grad, times[-1]))
+        rows.append(history_row(it, loss, mt.param_mse(theta, twin.target, d), theta, grad, times[-1]))
         print(f"  {task} seed {seed} iteration {it}: loss {loss:.4e} param MSE {rows[-1]['param_mse']:.3e} "
               f"|grad| {rows[-1]['grad_norm']:.2e} ({times[-1]:.1f} s)", file=sys.stderr, flush=True)
     final = twin.render(adam.x, seed)
@@ -117,20 +119,17 @@ def one_run(mi, task: str, seed: int, scale: float | None, cap: int | None, out:
     return {
         "task": task, "seed": seed, "integrator": INTEGRATORS[task], "iterations": len(rows),
         "spp": twin.spp, "scale": 1.0 if scale is None else scale, "lr": float(d["lr"]),
-        "start_param_mse": mse(twin.start, twin.target), "final_param_mse": mse(adam.x, twin.target),
+        "start_param_mse": mt.param_mse(twin.start, twin.target, d),
+        "final_param_mse": mt.param_mse(adam.x, twin.target, d),
         "start_image_mse": rows[0]["loss"], "final_image_mse": float(np.mean((final - reference) ** 2)),
         # The first iteration compiles Mitsuba's kernels: the mean is over the others.
         "seconds_per_iteration": float(np.mean(times[1:] if len(times) > 1 else times)),
     }
 
 
-def mse(a: np.ndarray, b: np.ndarray) -> float:
-    return float(np.mean((np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64)) ** 2))
-
-
-def history_row(it: int, loss: float, theta: np.ndarray, target: np.ndarray, grad: np.ndarray,
+def history_row(it: int, loss: float, param_mse: float, theta: np.ndarray, grad: np.ndarray,
                 seconds: float) -> dict[str, Any]:
-    row: dict[str, Any] = {"iteration": it, "loss": loss, "param_mse": mse(theta, target),
+    row: dict[str, Any] = {"iteration": it, "loss": loss, "param_mse": param_mse,
                            "grad_norm": float(np.linalg.norm(grad)), "seconds": seconds}
     if theta.size <= 6:
         row |= {f"theta{i}": float(v) for i, v in enumerate(theta.ravel())}

@@ -28,6 +28,29 @@ def _affine(rows) -> np.ndarray:
     return m
 
 
+def task_box(defaults: dict[str, Any], n: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """The task's box for ``n`` parameters from its exported ``defaults``, as the path tracer
+    uses it: [0, 1] per parameter but [-1, 2] for an angle of period 1 (``periodic``: a period
+    each side, so the seam is no wall); None when the task is unbounded."""
+    if not defaults["unit_box"]:
+        return None
+    lower, upper = np.zeros(n), np.ones(n)
+    for i in defaults.get("periodic", []):
+        lower[i], upper[i] = -1.0, 2.0
+    return lower, upper
+
+
+def param_mse(x, target, defaults: dict[str, Any]) -> float:
+    """The path tracer's parameter error: the plain mean of squared differences, with each
+    periodic parameter outside [0, 1] first brought into [0, 1) by whole periods (the same
+    scene)."""
+    x = np.array(x, dtype=np.float64)
+    for i in defaults.get("periodic", []):
+        if not 0.0 <= x[i] <= 1.0:
+            x[i] = x[i] % 1.0
+    return float(np.mean((x - np.asarray(target, dtype=np.float64)) ** 2))
+
+
 def export_at(task: str, theta, spp: int | None = None, scale: float | None = None,
               mi=None) -> dict[str, Any]:
     """The task's description at ``theta``; with ``mi``, its textures' texels as arrays in

@@ -84,7 +84,8 @@ def one_run(mi, task: str, seed: int, scale: float, budget_scale: float, out: Pa
     target = target_theta(task, scale)
     reference = twin.render(target, seed)
     budget = max(2 * int(d["samples"]), int(round(d["samples"] * d["iterations"] * budget_scale)))
-    bounds = [(0.0, 1.0)] * len(start) if d["unit_box"] else None
+    box = mt.task_box(d, len(start))
+    bounds = None if box is None else list(zip(*box))
     renders = 0
     t0 = time.perf_counter()
 
@@ -108,8 +109,8 @@ def one_run(mi, task: str, seed: int, scale: float, budget_scale: float, out: Pa
         "task": task, "method": method, "seed": seed, "scale": scale, "spp": twin.spp,
         "width": int(twin.desc["film"]["width"]), "height": int(twin.desc["film"]["height"]),
         "budget": budget, "paper_budget": int(d["samples"] * d["iterations"]), "nfev": int(result.nfev),
-        "start_param_mse": float(np.mean((start - target) ** 2)),
-        "param_mse": float(np.mean((x - target) ** 2)), "image_mse": float(result.fun),
+        "start_param_mse": mt.param_mse(start, target, d),
+        "param_mse": mt.param_mse(x, target, d), "image_mse": float(result.fun),
         "start_image_mse": float(np.mean((twin.render(start, seed) - reference) ** 2)),
         "seconds": seconds, "seconds_per_render": seconds / max(renders, 1),
         "final_theta": x.tolist() if len(x) <= 1000 else None,

@@ -18,7 +18,9 @@
 //! - `textures`: `{"file", "width", "height"}`: linear RGB in [0, 1], row 0 at v = 0,
 //!   bilinear, clamped at the edges, texel centres at half-integers;
 //! - `defaults`: the task's supplemental Table 1 row (`samples`, `sigma0`, `spp`, `lr`,
-//!   `iterations`) and `unit_box` (theta in [0, 1]^n, else unbounded);
+//!   `iterations`), `unit_box` (theta in [0, 1]^n, else unbounded) and `periodic` (the
+//!   indices of angles of period 1, whose box is [-1, 2] and whose error is read on the
+//!   circle: GI's box rotation);
 //! - `paper` (all tasks but TEXTURE): the paper's results, main paper Table 2 (`image_mse`,
 //!   `param_mse`, `mitsuba_image_mse`, `mitsuba_param_mse`) and Table 3
 //!   (`seconds_per_iteration`, GPU);
@@ -55,8 +57,9 @@ pub struct Header<'a> {
     pub theta: &'a [f64],
     /// Samples per pixel and longest path.
     pub settings: Settings,
-    /// The task's hyperparameters (supplemental Table 1) and whether theta lives in [0, 1]^n.
-    pub defaults: Option<(Defaults, bool)>,
+    /// The task's hyperparameters (supplemental Table 1), whether theta lives in [0, 1]^n,
+    /// and which parameters are angles of period 1 ([`crate::tasks::Task::periodic`]).
+    pub defaults: Option<(Defaults, bool, &'a [usize])>,
     /// The paper's results for the task (main paper Table 2, Table 3's seconds), if it has them.
     pub paper: Option<Paper>,
 }
@@ -130,10 +133,10 @@ pub fn describe(header: &Header, scene: &Scene, files: &mut Vec<(String, File)>)
         files.push((name.clone(), File::Text(json!(header.theta).to_string())));
         value["theta_file"] = json!(name);
     }
-    if let Some((d, unit_box)) = header.defaults {
+    if let Some((d, unit_box, periodic)) = header.defaults {
         value["defaults"] = json!({
             "samples": d.samples, "sigma0": d.sigma0, "spp": d.spp, "lr": d.lr,
-            "iterations": d.iterations, "unit_box": unit_box,
+            "iterations": d.iterations, "unit_box": unit_box, "periodic": periodic,
         });
     }
     if let Some(p) = header.paper {
@@ -237,7 +240,7 @@ mod tests {
                 params: "target",
                 theta: &theta,
                 settings: Settings::new(4, 0, task.max_depth()),
-                defaults: Some((task.defaults(), task.bounds().is_some())),
+                defaults: Some((task.defaults(), task.bounds().is_some(), task.periodic())),
                 paper: task.paper(),
             };
             let mut files = Vec::new();
@@ -272,6 +275,7 @@ mod tests {
             assert_eq!(v.get("theta_file").is_some(), task.dim() > THETA_INLINE);
             assert_eq!(v["defaults"]["samples"], task.defaults().samples);
             assert_eq!(v["defaults"]["unit_box"], task.bounds().is_some());
+            assert_eq!(v["defaults"]["periodic"], json!(task.periodic()));
             assert_eq!(v.get("paper").is_some(), task.name() != "texture");
         }
     }

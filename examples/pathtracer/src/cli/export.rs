@@ -39,7 +39,7 @@ pub(super) fn run(args: Args) -> Result<()> {
         params: which,
         theta: &theta,
         settings: Settings::new(args.spp.unwrap_or(task.defaults().spp), 0, task.max_depth()),
-        defaults: Some((task.defaults(), task.bounds().is_some())),
+        defaults: Some((task.defaults(), task.bounds().is_some(), task.periodic())),
         paper: task.paper(),
     };
     std::fs::create_dir_all(&args.out)?;

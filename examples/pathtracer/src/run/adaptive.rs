@@ -26,7 +26,6 @@ use plateau_free::{Minimizer, Objective, Points, Stop as LibraryStop, Strategy};
 
 use super::{progress_bar, Ended, Method, Progress, Row, Run};
 use crate::report::Result;
-use crate::tasks::param_mse;
 
 /// The first row of the polish in a polished run of `budget` evaluations with `samples` per
 /// estimate and the share `polish` for the polish: the loop's iterations (on its share of the
@@ -64,7 +63,6 @@ where
     let mut objective = Recording {
         run,
         loss,
-        target: task.target(),
         budget,
         best: RefCell::new((f64::INFINITY, start.to_vec())),
         evaluations: Cell::new(0),
@@ -185,7 +183,6 @@ const FNV_START: u64 = 0xcbf2_9ce4_8422_2325;
 struct Recording<'a, L> {
     run: &'a Run<'a>,
     loss: &'a L,
-    target: Vec<f64>,
     budget: usize,
     /// The best value and point so far.
     best: RefCell<(f64, Vec<f64>)>,
@@ -354,7 +351,7 @@ impl<L: Fn(&[f64], u64) -> f64> Recording<'_, L> {
             iteration,
             sigma: spread,
             loss: mean_value,
-            param_mse: param_mse(&best.1, &self.target),
+            param_mse: self.run.task.param_mse(&best.1),
             image_mse,
             // Every value logged was rendered once (by this run or the one it continues).
             renders: self.log.borrow().len(),

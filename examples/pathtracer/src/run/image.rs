@@ -19,7 +19,6 @@ use plateau_free::LeastSquares;
 use super::adaptive::Finished;
 use super::{progress_bar, Crn, Ended, Row, Run};
 use crate::report::Result;
-use crate::tasks::param_mse;
 
 /// Above this many parameters the current point is not kept per row (the progress strip
 /// then shows six evenly spaced points all the same).
@@ -46,7 +45,6 @@ pub(super) fn run(run: &Run<'_>, render_time: &Cell<Duration>) -> Result<Finishe
     let mut method = options.ask_tell(start)?;
     let reference = &run.reference.data;
     let m = reference.len();
-    let target = task.target();
     let bar = progress_bar(task.name(), budget, run.ctl.progress);
     let clock = Instant::now();
     let (mut history, mut kept) = (Vec::new(), vec![start.to_vec()]);
@@ -71,7 +69,7 @@ pub(super) fn run(run: &Run<'_>, render_time: &Cell<Duration>) -> Result<Finishe
             iteration: method.evaluations(),
             sigma: method.sigma(),
             loss: mse,
-            param_mse: param_mse(method.theta(), &target),
+            param_mse: task.param_mse(method.theta()),
             image_mse: Some(mse),
             // Every render is the method's own; the image MSE is that of the point just
             // evaluated, so no render is spent on evaluation alone.

@@ -39,7 +39,7 @@ pub use stall_replay::{replay as replay_stall, Replayed};
 
 use crate::render::Image;
 use crate::report::Result;
-use crate::tasks::{param_mse, Task};
+use crate::tasks::Task;
 
 /// Runs one optimisation of `task`, writing its outputs into `out` if given (no checkpoint,
 /// never interrupted: [`optimize_with`] has those).
@@ -486,7 +486,6 @@ struct Recorder<'a> {
     task: &'a Task,
     s: &'a Settings,
     reference: &'a Image,
-    target: Vec<f64>,
     snapshot_at: Vec<usize>,
     snapshots: Vec<Vec<f64>>,
     history: Vec<Row>,
@@ -514,7 +513,6 @@ impl<'a> Recorder<'a> {
             task,
             s,
             reference,
-            target: task.target(),
             // k * (iterations - 1) / 5 without overflow, whatever the count.
             snapshot_at: (0..6u128)
                 .map(|k| (k * s.iterations.saturating_sub(1) as u128 / 5) as usize)
@@ -568,7 +566,7 @@ impl<'a> Recorder<'a> {
             iteration: step.iteration,
             sigma: step.sigma,
             loss: step.estimate.mean_value,
-            param_mse: param_mse(step.theta, &self.target),
+            param_mse: self.task.param_mse(step.theta),
             image_mse,
             renders: self.renders.get(),
             eval_renders: eval_renders + usize::from(image_mse.is_some()),
@@ -638,9 +636,9 @@ fn summarize(
         renders_to_paper: None,
         evaluation_renders: 0,
         reference_renders: 0,
-        initial_param_mse: param_mse(&start, &target),
+        initial_param_mse: task.param_mse(&start),
         initial_image_mse: initial.mse(reference),
-        param_mse: param_mse(final_theta, &target),
+        param_mse: task.param_mse(final_theta),
         image_mse: final_image.mse(reference),
         image_mse_other_seed,
         seconds_per_iteration: seconds_total / done,

@@ -89,4 +89,9 @@ impl Scenario for Gi {
     fn target(&self) -> Vec<f64> {
         vec![0.5, 0.5, 0.8, 0.1, 0.1, 0.3]
     }
+
+    /// The tall box's rotation: a quarter turn of a square box is the same box.
+    fn periodic(&self) -> &'static [usize] {
+        &[5]
+    }
 }

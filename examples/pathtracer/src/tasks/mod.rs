@@ -68,6 +68,13 @@ pub trait Scenario: Send + Sync {
     fn footprint(&self, _camera: Camera) -> Option<plateau_free::Sparsity> {
         None
     }
+    /// The parameters that are angles of period 1 (the scene at `theta[i] + 1` is the scene
+    /// at `theta[i]`, as a quarter turn of a square box): in a unit-box task their box is
+    /// [-1, 2] (so that a run can go on through the seam instead of stopping against it) and
+    /// the parameter error reads them on the circle ([`Task::param_mse`]). None by default.
+    fn periodic(&self) -> &'static [usize] {
+        &[]
+    }
 }
 
 /// A row of [`TASKS`]: name, scenario, camera, max depth, unit box, defaults.
@@ -264,10 +271,42 @@ impl Task {
         self.scenario.target()
     }
 
-    /// Box for the optimiser's projection, [0, 1]^n; None if unbounded.
+    /// Box for the optimiser's projection, [0, 1]^n but [-1, 2] for a periodic parameter
+    /// ([`Scenario::periodic`]: a period on either side, so the seam is no wall); None if
+    /// unbounded.
     pub fn bounds(&self) -> Option<(Vec<f64>, Vec<f64>)> {
         let n = self.dim();
-        self.unit_box.then(|| (vec![0.0; n], vec![1.0; n]))
+        self.unit_box.then(|| {
+            let (mut lower, mut upper) = (vec![0.0; n], vec![1.0; n]);
+            for &i in self.periodic() {
+                (lower[i], upper[i]) = (-1.0, 2.0);
+            }
+            (lower, upper)
+        })
+    }
+
+    /// The parameters that are angles of period 1 ([`Scenario::periodic`]).
+    pub fn periodic(&self) -> &'static [usize] {
+        self.scenario.periodic()
+    }
+
+    /// `theta` with each periodic parameter outside [0, 1] brought into [0, 1) by whole
+    /// periods (the same scene); a value inside [0, 1] is kept as it is, so that a run that
+    /// never left the unit box reads exactly as before.
+    pub fn canonical(&self, theta: &[f64]) -> Vec<f64> {
+        let mut theta = theta.to_vec();
+        for &i in self.periodic() {
+            if let Some(v) = theta.get_mut(i).filter(|v| !(0.0..=1.0).contains(*v)) {
+                *v = v.rem_euclid(1.0);
+            }
+        }
+        theta
+    }
+
+    /// The reported parameter error of `theta`: [`param_mse`] of its [`Task::canonical`]
+    /// form against the target.
+    pub fn param_mse(&self, theta: &[f64]) -> f64 {
+        param_mse(&self.canonical(theta), &self.target())
     }
 
     /// Longest path, in segments (2 = direct light only).
@@ -350,6 +389,44 @@ mod tests {
         assert_eq!(param_mse(&[1.0], &[]), f64::INFINITY);
     }
 
+    /// GI's box rotation is read on the circle: a whole period away is the target itself,
+    /// in the scene and in the error; inside [0, 1] nothing changes.
+    #[test]
+    fn a_periodic_parameter_is_read_on_the_circle() {
+        let gi = by_name("gi").expect("gi");
+        assert_eq!(gi.periodic(), [5]);
+        let target = gi.target();
+        let mut turned = target.clone();
+        turned[5] += 1.0;
+        assert!(gi.param_mse(&turned) < 1e-30);
+        turned[5] -= 2.0;
+        assert!(gi.param_mse(&turned) < 1e-30);
+        // At the seam's far side (1.0) the error is the plain one, as runs before saw it.
+        let mut seam = target.clone();
+        seam[5] = 1.0;
+        assert!((gi.param_mse(&seam) - 0.49 / 6.0).abs() < 1e-15);
+        // A whole period away renders the same picture (up to float rounding in the turn),
+        // unlike the seam.
+        let view = View {
+            scale: Some(0.25),
+            ..Default::default()
+        };
+        let render = |theta: &[f64]| gi.render(theta, 2, 2, view);
+        let reference = render(&target);
+        let (same, seam) = (
+            reference.mse(&render(&turned)),
+            reference.mse(&render(&seam)),
+        );
+        assert!(same < 1e-3 * seam, "{same} vs {seam}");
+        // Other tasks have no periodic parameter and keep their plain error.
+        let cup = by_name("cup").expect("cup");
+        assert!(cup.periodic().is_empty());
+        assert_eq!(
+            cup.param_mse(&cup.start()),
+            param_mse(&cup.start(), &cup.target())
+        );
+    }
+
     #[test]
     fn names_round_trip_and_shapes_agree() {
         for task in all() {
@@ -361,6 +438,12 @@ mod tests {
                 assert_eq!(lo.len(), task.dim());
                 for (i, (s, t)) in task.start().iter().zip(task.target()).enumerate() {
                     assert!(lo[i] <= *s && *s <= hi[i] && lo[i] <= t && t <= hi[i]);
+                    // A period each side of the unit interval, or the unit interval.
+                    let periodic = task.periodic().contains(&i);
+                    assert_eq!(
+                        (lo[i], hi[i]),
+                        if periodic { (-1.0, 2.0) } else { (0.0, 1.0) }
+                    );
                 }
             }
         }
