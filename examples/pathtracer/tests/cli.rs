@@ -154,13 +154,13 @@ fn hand_over(dir: &Path) -> usize {
         .expect("a row at sigma 0")
 }
 
-/// `--polish 0.5` hands over after half the renders (40 of 80: the start, 19 iterations of 2
-/// and the final evaluation) where the default 0.25 hands over after 60; the summary says the
-/// share.
+/// The default share, 0.5, hands over after half the renders (40 of 80: the start, 19
+/// iterations of 2 and the final evaluation) where `--polish 0.25` hands over after 60; the
+/// summary says the share.
 #[test]
 fn the_polish_share_sets_where_the_loop_hands_over() {
     let mut at = Vec::new();
-    for share in [None, Some("0.5")] {
+    for share in [None, Some("0.25")] {
         let out = fresh(&format!("polish-at-{}", share.unwrap_or("default")));
         let out_arg = out.display().to_string();
         let mut line = vec![
@@ -183,11 +183,11 @@ fn the_polish_share_sets_where_the_loop_hands_over() {
         assert_eq!(code, Some(0), "{stderr}");
         at.push(hand_over(&out));
         let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
-        let polish = format!("\"polish\": {}", share.unwrap_or("0.25"));
+        let polish = format!("\"polish\": {}", share.unwrap_or("0.5"));
         assert!(summary.contains(&polish), "{polish} not in {summary}");
         let _ = std::fs::remove_dir_all(&out);
     }
-    assert_eq!(at, [60, 40]);
+    assert_eq!(at, [40, 60]);
 }
 
 #[test]

@@ -36,7 +36,7 @@ pub(super) struct Args {
     #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = values::fraction)]
     stop_when_stalled: Option<f64>,
     /// With --method polished (the default): the share of every run's renders that the
-    /// adaptive search gets after the paper's loop (as `optimize --polish`) [default: 0.25].
+    /// adaptive search gets after the paper's loop (as `optimize --polish`) [default: 0.5].
     #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = values::share)]
     polish: Option<f64>,
     /// Skip the finite-difference baseline.

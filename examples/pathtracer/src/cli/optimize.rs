@@ -65,8 +65,8 @@ struct RunOptions {
     /// Ablation: constant sigma = sigma0 [default: the paper's annealing].
     #[arg(long)]
     no_anneal: bool,
-    /// polished: the paper's loop (plateau-free gradient, Adam, annealing) on three quarters
-    /// of the N x iterations evaluations, then the library's adaptive search from its best
+    /// polished: the paper's loop (plateau-free gradient, Adam, annealing) on half of the
+    /// N x iterations evaluations (--polish), then the library's adaptive search from its best
     /// point; plateau: the paper's loop alone; fd (central finite differences) or spsa in the
     /// paper's loop; adaptive: the library's Minimizer alone (no loop, no learning rate) with
     /// the same evaluations, sigma0, bounds and seed; image: Gauss-Newton on the residual
@@ -95,7 +95,7 @@ struct RunOptions {
     #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = values::fraction)]
     stop_when_stalled: Option<f64>,
     /// With --method polished: the share of the renders that the adaptive search gets after
-    /// the paper's loop, whose annealing is compressed to the rest [default: 0.25].
+    /// the paper's loop, whose annealing is compressed to the rest [default: 0.5].
     #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = values::share)]
     polish: Option<f64>,
     /// No progress bar.

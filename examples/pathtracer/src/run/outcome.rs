@@ -112,7 +112,7 @@ pub struct Summary {
     pub interrupted: bool,
     /// A polished run's share of the renders for the polish (`--polish`); absent for the
     /// other methods and in polished runs written before the option (they ran with
-    /// [`POLISH`](super::POLISH)).
+    /// [`POLISH_BEFORE`](super::POLISH_BEFORE)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub polish: Option<f64>,
     /// The final parameters (omitted above 16 dimensions).
