@@ -10,8 +10,12 @@ pub mod integrator;
 mod lanes;
 pub mod light;
 pub mod material;
+mod pairs;
 pub mod rng;
+mod tri_lanes;
 
+#[cfg(test)]
+mod pinned;
 #[cfg(test)]
 mod tests;
 
