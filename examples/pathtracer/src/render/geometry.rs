@@ -7,8 +7,8 @@
 use std::sync::Arc;
 
 use super::lanes::QuadLanes;
+use super::packed::PackedMesh;
 use super::pairs::PairBvh;
-use super::tri_lanes::{RayLanes, TriLanes};
 use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 use obvhs::{
     aabb::Aabb,
@@ -345,9 +345,8 @@ pub enum BvhKind {
 }
 
 enum Accel {
-    /// A Bvh2 traversed in its pair layout, each leaf's triangles packed four to a
-    /// [`TriLanes`] (leaf `first` indexes the packs): obvhs's answers, faster.
-    Pairs(PairBvh, Vec<TriLanes>),
+    /// A Bvh2 re-laid for faster queries with obvhs's answers.
+    Packed(PackedMesh),
     Bvh2(Bvh2),
     CwBvh(CwBvh),
 }
@@ -376,6 +375,11 @@ impl PreparedTriangle {
             e2,
             n: e1.cross(e2),
         }
+    }
+
+    /// (v0, e1, e2, n), as [`PackedMesh`] takes them.
+    fn parts(&self) -> [Vec3A; 4] {
+        [self.v0, self.e1, self.e2, self.n]
     }
 
     /// Distance along `ray` (in [tmin, tmax]) or infinity: `Triangle::intersect` of obvhs 0.4.
@@ -417,23 +421,12 @@ impl Mesh {
             BvhKind::Bvh2 => {
                 let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(tris, params, &mut unused);
                 let order = bvh.primitive_indices.clone();
-                let prepared: Vec<PreparedTriangle> = order
+                let parts: Vec<[Vec3A; 4]> = order
                     .iter()
-                    .map(|&i| PreparedTriangle::new(&tris[i as usize]))
+                    .map(|&i| PreparedTriangle::new(&tris[i as usize]).parts())
                     .collect();
-                let mut packs = Vec::new();
-                let pairs = PairBvh::with_leaves(&bvh, |first, count| {
-                    let at = packs.len() as u32;
-                    let leaf = &prepared[first as usize..(first + count) as usize];
-                    for (k, four) in leaf.chunks(4).enumerate() {
-                        let parts: Vec<[Vec3A; 4]> =
-                            four.iter().map(|t| [t.v0, t.e1, t.e2, t.n]).collect();
-                        packs.push(TriLanes::pack(first + 4 * k as u32, &parts));
-                    }
-                    at
-                });
-                let accel = match pairs {
-                    Some(pairs) => Accel::Pairs(pairs, packs),
+                let accel = match PackedMesh::new(&bvh, &parts) {
+                    Some(packed) => Accel::Packed(packed),
                     None => Accel::Bvh2(bvh),
                 };
                 (accel, order)
@@ -475,7 +468,7 @@ impl Mesh {
         let mut hit = RayHit::none();
         let tris = &self.prepared;
         let found = match &self.accel {
-            Accel::Pairs(p, packs) => return closest_in_packs(p, packs, ray),
+            Accel::Packed(p) => return p.closest(ray),
             Accel::Bvh2(b) => b.ray_traverse(ray, &mut hit, |r, id| tris[id].intersect(r)),
             Accel::CwBvh(b) => b.ray_traverse(ray, &mut hit, |r, id| tris[id].intersect(r)),
         };
@@ -488,56 +481,12 @@ impl Mesh {
         let ray = BvhRay::new(o, d, T_MIN, tmax);
         let tris = &self.prepared;
         let miss = match &self.accel {
-            Accel::Pairs(p, packs) => return any_in_packs(p, packs, ray),
+            Accel::Packed(p) => return p.any(ray),
             Accel::Bvh2(b) => b.ray_traverse_miss(ray, |r, id| tris[id].intersect(r)),
             Accel::CwBvh(b) => b.ray_traverse_miss(ray, |r, id| tris[id].intersect(r)),
         };
         !miss
     }
-}
-
-/// The packs of a leaf whose `first` pack is `first` and which holds `count` triangles.
-#[inline(always)]
-fn leaf_packs(packs: &[TriLanes], first: u32, count: u32) -> &[TriLanes] {
-    &packs[first as usize..(first + count.div_ceil(4)) as usize]
-}
-
-/// [`Mesh::intersect`] through the pair layout and the packed triangles: each lane that hits
-/// closer than the closest so far replaces it, in the leaf's order, as obvhs's loop does.
-#[inline(always)]
-fn closest_in_packs(pairs: &PairBvh, packs: &[TriLanes], mut ray: BvhRay) -> Option<(f32, u32)> {
-    let lanes = RayLanes::new(ray.origin, ray.direction);
-    let mut found = None;
-    pairs.traverse(&mut ray, |ray, first, count| {
-        for pack in leaf_packs(packs, first, count) {
-            let (t, mut hits) = pack.distances(&lanes, ray.tmin);
-            while hits != 0 {
-                let k = hits.trailing_zeros();
-                hits &= hits - 1;
-                if t[k as usize] < ray.tmax {
-                    ray.tmax = t[k as usize];
-                    found = Some(pack.first() + k);
-                }
-            }
-        }
-        true
-    });
-    found.map(|id| (ray.tmax, id))
-}
-
-/// [`Mesh::occluded`] through the pair layout and the packed triangles.
-#[inline(always)]
-fn any_in_packs(pairs: &PairBvh, packs: &[TriLanes], mut ray: BvhRay) -> bool {
-    let lanes = RayLanes::new(ray.origin, ray.direction);
-    let mut hit = false;
-    pairs.traverse(&mut ray, |ray, first, count| {
-        hit = leaf_packs(packs, first, count).iter().any(|pack| {
-            let (t, hits) = pack.distances(&lanes, ray.tmin);
-            (0..4).any(|k| hits & (1 << k) != 0 && t[k] < ray.tmax)
-        });
-        !hit
-    });
-    hit
 }
 
 /// A placed copy of a mesh: rigid motion (rotation, then translation).
@@ -856,7 +805,7 @@ mod tests {
     fn pair_layout_and_packed_triangles_answer_as_obvhs() {
         let tris = grid_mesh();
         let mesh = Mesh::new(&tris, BvhKind::Bvh2);
-        assert!(matches!(mesh.accel, Accel::Pairs(..)));
+        assert!(matches!(mesh.accel, Accel::Packed(..)));
         let mut unused = std::time::Duration::default();
         let params = BvhBuildParams::medium_build();
         let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(&tris, params, &mut unused);

@@ -10,6 +10,7 @@ pub mod integrator;
 mod lanes;
 pub mod light;
 pub mod material;
+mod packed;
 mod pairs;
 pub mod rng;
 mod tri_lanes;
