@@ -335,11 +335,14 @@ impl BoxSet {
     }
 }
 
-/// Which BVH layout a mesh uses (both from obvhs; the faster is the default, see the bench).
+/// Which BVH a mesh uses (all built by obvhs; the fastest is the default, see the bench).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BvhKind {
-    /// Binary BVH.
+    /// Binary BVH, traversed in the pair layout with triangles tested four at a time
+    /// (`render/packed.rs`): obvhs's answers, bit for bit.
     Bvh2,
+    /// The same binary BVH traversed by obvhs itself (the reference for the bench).
+    Bvh2Obvhs,
     /// Compressed 8-wide BVH, traversed four nodes at a time with SIMD.
     CwBvh,
 }
@@ -418,6 +421,11 @@ impl Mesh {
         let mut unused = std::time::Duration::default();
         let params = BvhBuildParams::medium_build();
         let (accel, order) = match kind {
+            BvhKind::Bvh2Obvhs => {
+                let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(tris, params, &mut unused);
+                let order = bvh.primitive_indices.clone();
+                (Accel::Bvh2(bvh), order)
+            }
             BvhKind::Bvh2 => {
                 let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(tris, params, &mut unused);
                 let order = bvh.primitive_indices.clone();

@@ -50,55 +50,17 @@ const IN_FLIGHT: u32 = 4;
 pub fn render(scene: &Scene, settings: &Settings) -> Image {
     let camera = &scene.camera;
     let (width, height) = (camera.width, camera.height);
-    let spp = settings.spp.max(1);
     let mut image = Image::new(width, height);
-    let origin = camera.origin();
     // Packing pays from a full group of four on: with one quad (SHADOW, SORT, TEXTURE) the
     // padded lanes made those renders 10-25 % slower. Either way the bits are the same.
     let quads = &scene.geometry.quads;
     let lanes = (quads.len() >= 4).then(|| QuadLanes::pack(quads));
-    let lanes = lanes.as_deref();
-    let tracer = Tracer::new(scene, lanes, settings);
-    // A camera sample's path: its stream, its jittered ray through pixel (x, y).
-    let camera_path = |x: u32, y: u32, s: u32| {
-        let mut rng = Sampler::new(settings.seed, y * width + x, s);
-        let (jx, jy) = rng.next_2d();
-        Path::new(origin, camera.direction(x, y, jx, jy), rng)
-    };
+    let tracer = Tracer::new(scene, lanes.as_deref(), settings);
     image
         .data
         .par_chunks_mut(3 * width as usize)
         .enumerate()
-        .for_each(|(y, row)| {
-            let y = y as u32;
-            for x in 0..width {
-                let mut sum = Vec3A::ZERO;
-                // A NaN or infinity from a degenerate configuration must never reach the
-                // image: drop that sample (a zero-contribution sample, still counted). The
-                // samples are added in order, traced `IN_FLIGHT` at a time.
-                let mut add = |l: Vec3A| {
-                    if l.is_finite() {
-                        sum += l;
-                    }
-                };
-                let mut s = 0;
-                while s + IN_FLIGHT <= spp {
-                    let paths = std::array::from_fn(|k| camera_path(x, y, s + k as u32));
-                    for l in tracer.trace_many::<{ IN_FLIGHT as usize }>(paths) {
-                        add(l);
-                    }
-                    s += IN_FLIGHT;
-                }
-                for s in s..spp {
-                    add(tracer.trace(camera_path(x, y, s)));
-                }
-                let v = sum / spp as f32;
-                let i = 3 * x as usize;
-                row[i] = v.x;
-                row[i + 1] = v.y;
-                row[i + 2] = v.z;
-            }
-        });
+        .for_each(|(y, row)| tracer.row(y as u32, row));
     image
 }
 
@@ -180,6 +142,49 @@ impl<'a> Tracer<'a> {
             has_env,
             env_nee: settings.nee && lights.environment_nee && has_env,
         }
+    }
+
+    /// Row `y` of the image into `row` (RGB per pixel): each pixel's samples traced
+    /// `IN_FLIGHT` at a time, the rest one by one.
+    #[inline(always)]
+    fn row(&self, y: u32, row: &mut [f32]) {
+        let spp = self.settings.spp.max(1);
+        for x in 0..self.scene.camera.width {
+            let mut sum = Vec3A::ZERO;
+            // A NaN or infinity from a degenerate configuration must never reach the image:
+            // drop that sample (a zero-contribution sample, still counted). The samples are
+            // added in order.
+            let mut add = |l: Vec3A| {
+                if l.is_finite() {
+                    sum += l;
+                }
+            };
+            let mut s = 0;
+            while s + IN_FLIGHT <= spp {
+                let paths = std::array::from_fn(|k| self.camera_path(x, y, s + k as u32));
+                for l in self.trace_many::<{ IN_FLIGHT as usize }>(paths) {
+                    add(l);
+                }
+                s += IN_FLIGHT;
+            }
+            for s in s..spp {
+                add(self.trace(self.camera_path(x, y, s)));
+            }
+            let v = sum / spp as f32;
+            let i = 3 * x as usize;
+            row[i] = v.x;
+            row[i + 1] = v.y;
+            row[i + 2] = v.z;
+        }
+    }
+
+    /// Camera sample `s` of pixel (`x`, `y`): its stream and its jittered ray.
+    #[inline(always)]
+    fn camera_path(&self, x: u32, y: u32, s: u32) -> Path {
+        let camera = &self.scene.camera;
+        let mut rng = Sampler::new(self.settings.seed, y * camera.width + x, s);
+        let (jx, jy) = rng.next_2d();
+        Path::new(camera.origin(), camera.direction(x, y, jx, jy), rng)
     }
 
     /// Radiance of one camera sample: its path traced to the end.
