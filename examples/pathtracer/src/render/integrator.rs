@@ -96,7 +96,7 @@ struct Tracer<'a> {
     env_nee: bool,
 }
 
-/// One camera path in flight: the state `trace`'s loop kept in locals, so that two paths can
+/// One camera path in flight: the state the old `trace` loop kept in locals, so that paths can
 /// take turns segment by segment and the CPU overlaps their (independent) dependency chains.
 struct Path {
     o: Vec3A,
