@@ -1,6 +1,7 @@
 //! Renderer benchmarks: per-task render time at the task's default settings, the parts of a
 //! render per task on one thread (camera rays, primary hits, the whole image), BVH build
-//! times, Bvh2 vs CwBvh traversal on the CUP mug, and 1 vs 2 rayon threads on SHADOW.
+//! times, the mug's BVH traversals (ours on obvhs's Bvh2, obvhs's own, its CwBvh), and 1 vs
+//! 2 rayon threads on SHADOW.
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -147,7 +148,7 @@ fn traversal(c: &mut Criterion) {
     let tris = tasks::cup::mug_triangles();
     let rays = mug_rays();
     let mut group = c.benchmark_group("mug_traversal_65k_rays");
-    for kind in [BvhKind::Bvh2, BvhKind::CwBvh] {
+    for kind in [BvhKind::Bvh2, BvhKind::Bvh2Obvhs, BvhKind::CwBvh] {
         let mesh = Mesh::new(&tris, kind);
         group.bench_function(format!("{kind:?}_closest"), |b| {
             b.iter(|| {

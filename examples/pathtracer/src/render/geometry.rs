@@ -7,6 +7,8 @@
 use std::sync::Arc;
 
 use super::lanes::QuadLanes;
+use super::packed::PackedMesh;
+use super::pairs::PairBvh;
 use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 use obvhs::{
     aabb::Aabb,
@@ -275,6 +277,8 @@ pub struct AaBox {
 pub struct BoxSet {
     boxes: Vec<AaBox>,
     bvh: Bvh2,
+    /// The same tree laid out for faster traversal (None if too deep for it).
+    pairs: Option<PairBvh>,
 }
 
 impl BoxSet {
@@ -288,25 +292,64 @@ impl BoxSet {
             .iter()
             .map(|&i| boxes[i as usize])
             .collect();
-        Self { boxes, bvh }
+        let pairs = PairBvh::new(&bvh);
+        Self { boxes, bvh, pairs }
     }
 
     /// The boxes (in the BVH's order).
     pub fn boxes(&self) -> &[AaBox] {
         &self.boxes
     }
+
+    /// Closest (distance, box) on the ray before `tmax`.
+    #[inline(always)]
+    fn closest(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, u32)> {
+        let ray = BvhRay::new(o, d, T_MIN, tmax);
+        let boxes = &self.boxes;
+        let test = |r: &BvhRay, id: usize| {
+            let b = &boxes[id];
+            slab(r.origin, r.inv_direction, b.min, b.max, r.tmax)
+        };
+        if let Some(pairs) = &self.pairs {
+            return pairs.closest(ray, test);
+        }
+        let mut hit = RayHit::none();
+        self.bvh
+            .ray_traverse(ray, &mut hit, test)
+            .then_some((hit.t, hit.primitive_id))
+    }
+
+    /// Whether a box lies on the ray before `tmax`.
+    #[inline(always)]
+    fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
+        let ray = BvhRay::new(o, d, T_MIN, tmax);
+        let boxes = &self.boxes;
+        let test = |r: &BvhRay, id: usize| {
+            let b = &boxes[id];
+            slab(r.origin, r.inv_direction, b.min, b.max, r.tmax)
+        };
+        match &self.pairs {
+            Some(pairs) => pairs.any(ray, test),
+            None => !self.bvh.ray_traverse_miss(ray, test),
+        }
+    }
 }
 
-/// Which BVH layout a mesh uses (both from obvhs; the faster is the default, see the bench).
+/// Which BVH a mesh uses (all built by obvhs; the fastest is the default, see the bench).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BvhKind {
-    /// Binary BVH.
+    /// Binary BVH, traversed in the pair layout with triangles tested four at a time
+    /// (`render/packed.rs`): obvhs's answers, bit for bit.
     Bvh2,
+    /// The same binary BVH traversed by obvhs itself (the reference for the bench).
+    Bvh2Obvhs,
     /// Compressed 8-wide BVH, traversed four nodes at a time with SIMD.
     CwBvh,
 }
 
 enum Accel {
+    /// A Bvh2 re-laid for faster queries with obvhs's answers.
+    Packed(PackedMesh),
     Bvh2(Bvh2),
     CwBvh(CwBvh),
 }
@@ -335,6 +378,11 @@ impl PreparedTriangle {
             e2,
             n: e1.cross(e2),
         }
+    }
+
+    /// (v0, e1, e2, n), as [`PackedMesh`] takes them.
+    fn parts(&self) -> [Vec3A; 4] {
+        [self.v0, self.e1, self.e2, self.n]
     }
 
     /// Distance along `ray` (in [tmin, tmax]) or infinity: `Triangle::intersect` of obvhs 0.4.
@@ -373,10 +421,23 @@ impl Mesh {
         let mut unused = std::time::Duration::default();
         let params = BvhBuildParams::medium_build();
         let (accel, order) = match kind {
-            BvhKind::Bvh2 => {
+            BvhKind::Bvh2Obvhs => {
                 let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(tris, params, &mut unused);
                 let order = bvh.primitive_indices.clone();
                 (Accel::Bvh2(bvh), order)
+            }
+            BvhKind::Bvh2 => {
+                let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(tris, params, &mut unused);
+                let order = bvh.primitive_indices.clone();
+                let parts: Vec<[Vec3A; 4]> = order
+                    .iter()
+                    .map(|&i| PreparedTriangle::new(&tris[i as usize]).parts())
+                    .collect();
+                let accel = match PackedMesh::new(&bvh, &parts) {
+                    Some(packed) => Accel::Packed(packed),
+                    None => Accel::Bvh2(bvh),
+                };
+                (accel, order)
             }
             BvhKind::CwBvh => {
                 let bvh = build_cwbvh_from_tris(tris, params, &mut unused);
@@ -415,6 +476,7 @@ impl Mesh {
         let mut hit = RayHit::none();
         let tris = &self.prepared;
         let found = match &self.accel {
+            Accel::Packed(p) => return p.closest(ray),
             Accel::Bvh2(b) => b.ray_traverse(ray, &mut hit, |r, id| tris[id].intersect(r)),
             Accel::CwBvh(b) => b.ray_traverse(ray, &mut hit, |r, id| tris[id].intersect(r)),
         };
@@ -427,6 +489,7 @@ impl Mesh {
         let ray = BvhRay::new(o, d, T_MIN, tmax);
         let tris = &self.prepared;
         let miss = match &self.accel {
+            Accel::Packed(p) => return p.any(ray),
             Accel::Bvh2(b) => b.ray_traverse_miss(ray, |r, id| tris[id].intersect(r)),
             Accel::CwBvh(b) => b.ray_traverse_miss(ray, |r, id| tris[id].intersect(r)),
         };
@@ -566,15 +629,9 @@ impl Geometry {
             }
         }
         if let Some(set) = &self.box_set {
-            let ray = BvhRay::new(o, d, T_MIN, best);
-            let mut hit = RayHit::none();
-            let boxes = &set.boxes;
-            if set.bvh.ray_traverse(ray, &mut hit, |r, id| {
-                let b = &boxes[id];
-                slab(r.origin, r.inv_direction, b.min, b.max, r.tmax)
-            }) {
-                best = hit.t;
-                prim = Some(Prim::SetBox(hit.primitive_id));
+            if let Some((t, id)) = set.closest(o, d, best) {
+                best = t;
+                prim = Some(Prim::SetBox(id));
             }
         }
         for (k, inst) in self.instances.iter().enumerate() {
@@ -663,13 +720,7 @@ impl Geometry {
             return true;
         }
         if let Some(set) = &self.box_set {
-            let ray = BvhRay::new(o, d, T_MIN, tmax);
-            let boxes = &set.boxes;
-            let miss = set.bvh.ray_traverse_miss(ray, |r, id| {
-                let b = &boxes[id];
-                slab(r.origin, r.inv_direction, b.min, b.max, r.tmax)
-            });
-            if !miss {
+            if set.occluded(o, d, tmax) {
                 return true;
             }
         }
@@ -731,6 +782,87 @@ mod tests {
             hits += usize::from(want.is_finite());
         }
         assert!(hits > 1_000, "{hits}");
+    }
+
+    /// A bumpy 16 x 16 grid of triangle pairs: shared edges and vertices, where two
+    /// triangles can report the same distance and the traversal order picks the hit.
+    fn grid_mesh() -> Vec<Triangle> {
+        let z = |i: usize, j: usize| 0.3 * ((i * 7 + j * 3) % 5) as f32 / 5.0;
+        let v =
+            |i: usize, j: usize| Vec3A::new(i as f32 / 8.0 - 1.0, j as f32 / 8.0 - 1.0, z(i, j));
+        let mut tris = Vec::new();
+        for i in 0..16 {
+            for j in 0..16 {
+                let (a, b, c, d) = (v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1));
+                tris.push(Triangle {
+                    v0: a,
+                    v1: b,
+                    v2: c,
+                });
+                tris.push(Triangle {
+                    v0: a,
+                    v1: c,
+                    v2: d,
+                });
+            }
+        }
+        tris
+    }
+
+    #[test]
+    fn pair_layout_and_packed_triangles_answer_as_obvhs() {
+        let tris = grid_mesh();
+        let mesh = Mesh::new(&tris, BvhKind::Bvh2);
+        assert!(matches!(mesh.accel, Accel::Packed(..)));
+        let mut unused = std::time::Duration::default();
+        let params = BvhBuildParams::medium_build();
+        let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(&tris, params, &mut unused);
+        let mut rng = crate::render::rng::Sampler::new(4, 5, 6);
+        let mut hits = 0;
+        for k in 0..20_000 {
+            let (a, b) = rng.next_2d();
+            let (c, e) = rng.next_2d();
+            let o = Vec3A::new(4.0 * a - 2.0, 4.0 * b - 2.0, 2.0 * c - 0.5);
+            // Every fourth ray aims at a grid vertex, where neighbours tie.
+            let target = if k % 4 == 0 {
+                let (i, j) = ((a * 16.0) as usize, (b * 16.0) as usize);
+                tris[2 * (16 * i + j)].v0
+            } else {
+                Vec3A::new(2.0 * e - 1.0, 2.0 * a - 1.0, 0.3 * b)
+            };
+            let d = (target - o).normalize();
+            let tmax = if k % 3 == 0 {
+                f32::INFINITY
+            } else {
+                1.0 + 3.0 * e
+            };
+            let mut hit = RayHit::none();
+            let ray = BvhRay::new(o, d, T_MIN, tmax);
+            let want = bvh
+                .ray_traverse(ray, &mut hit, |r, id| {
+                    tris[bvh.primitive_indices[id] as usize].intersect(r)
+                })
+                .then(|| {
+                    (
+                        hit.t.to_bits(),
+                        tris[bvh.primitive_indices[hit.primitive_id as usize] as usize],
+                    )
+                });
+            let got = mesh
+                .intersect(o, d, tmax)
+                .map(|(t, id)| (t.to_bits(), mesh.triangles()[id as usize]));
+            assert_eq!(
+                got.map(|(t, tri)| (t, tri.v0, tri.v1, tri.v2)),
+                want.map(|(t, tri)| (t, tri.v0, tri.v1, tri.v2)),
+                "ray {k}"
+            );
+            let blocked = !bvh.ray_traverse_miss(ray, |r, id| {
+                tris[bvh.primitive_indices[id] as usize].intersect(r)
+            });
+            assert_eq!(mesh.occluded(o, d, tmax), blocked, "ray {k}");
+            hits += usize::from(want.is_some());
+        }
+        assert!(hits > 5_000, "{hits}");
     }
 
     #[test]

@@ -6,6 +6,7 @@ use glam::Vec3A;
 use rayon::prelude::*;
 
 use super::film::Image;
+use super::geometry::Surface;
 use super::lanes::QuadLanes;
 use super::material::{sample_cosine, scatter_dielectric, Material};
 use super::rng::Sampler;
@@ -38,47 +39,29 @@ impl Settings {
     }
 }
 
+/// Camera paths of a pixel traced together, taking turns segment by segment: each path is a
+/// long chain of dependent square roots and divisions, and independent chains side by side
+/// let the CPU overlap their latencies.
+const IN_FLIGHT: u32 = 4;
+
 /// Renders `scene`: a pure function of (scene, settings). Rows run in parallel with rayon,
 /// but each sample's random numbers come from (seed, pixel, sample) alone and each pixel sums
 /// its samples in order, so the bits do not depend on the thread count.
 pub fn render(scene: &Scene, settings: &Settings) -> Image {
     let camera = &scene.camera;
     let (width, height) = (camera.width, camera.height);
-    let spp = settings.spp.max(1);
     let mut image = Image::new(width, height);
-    let origin = camera.origin();
-    // Packing pays from a full group of four on: with one quad (SHADOW, SORT, TEXTURE) the
-    // padded lanes made those renders 10-25 % slower. Either way the bits are the same.
+    // Packing pays from three quads on (CUP's three: about 5 % faster on one thread); with
+    // one quad (SHADOW, SORT, TEXTURE) the padded lanes made those renders 10-25 % slower.
+    // Either way the bits are the same.
     let quads = &scene.geometry.quads;
-    let lanes = (quads.len() >= 4).then(|| QuadLanes::pack(quads));
-    let lanes = lanes.as_deref();
+    let lanes = (quads.len() >= 3).then(|| QuadLanes::pack(quads));
+    let tracer = Tracer::new(scene, lanes.as_deref(), settings);
     image
         .data
         .par_chunks_mut(3 * width as usize)
         .enumerate()
-        .for_each(|(y, row)| {
-            let y = y as u32;
-            for x in 0..width {
-                let pixel = y * width + x;
-                let mut sum = Vec3A::ZERO;
-                for s in 0..spp {
-                    let mut rng = Sampler::new(settings.seed, pixel, s);
-                    let (jx, jy) = rng.next_2d();
-                    let d = camera.direction(x, y, jx, jy);
-                    let l = trace(scene, lanes, origin, d, &mut rng, settings);
-                    // A NaN or infinity from a degenerate configuration must never reach the
-                    // image: drop that sample (a zero-contribution sample, still counted).
-                    if l.is_finite() {
-                        sum += l;
-                    }
-                }
-                let v = sum / spp as f32;
-                let i = 3 * x as usize;
-                row[i] = v.x;
-                row[i + 1] = v.y;
-                row[i + 2] = v.z;
-            }
-        });
+        .for_each(|(y, row)| tracer.row(y as u32, row));
     image
 }
 
@@ -103,137 +86,267 @@ fn offset(p: Vec3A) -> f32 {
     1e-4 * (1.0 + p.abs().max_element())
 }
 
-/// Radiance arriving at `o` from direction `-d`; `lanes` are the scene's quads packed for
-/// 4-wide tests (the same answers as testing them one by one, bit for bit).
-#[inline]
-fn trace(
-    scene: &Scene,
-    lanes: Option<&[QuadLanes]>,
-    mut o: Vec3A,
-    mut d: Vec3A,
-    rng: &mut Sampler,
-    s: &Settings,
-) -> Vec3A {
-    let geo = &scene.geometry;
-    let lights = &scene.lights;
-    let env = lights.environment;
-    let has_env = env != Vec3A::ZERO;
-    let env_nee = s.nee && lights.environment_nee && has_env;
+/// The scene and settings a path needs at every segment, and what follows from them.
+struct Tracer<'a> {
+    scene: &'a Scene,
+    /// The scene's quads packed for 4-wide tests (the same answers as one by one, bit for bit).
+    lanes: Option<&'a [QuadLanes]>,
+    settings: &'a Settings,
+    has_env: bool,
+    env_nee: bool,
+}
 
-    let mut radiance = Vec3A::ZERO;
-    let mut beta = Vec3A::ONE;
-    let mut segments = 1u32;
-    // The last scattering was a delta (or the camera): emission found by it cannot have
-    // been found by NEE, so it counts with full weight (this is what makes caustics).
-    let mut specular = true;
-    let mut prev_p = o;
-    let mut prev_pdf = 0.0f32;
+/// One camera path in flight: the state the old `trace` loop kept in locals, so that paths can
+/// take turns segment by segment and the CPU overlaps their (independent) dependency chains.
+struct Path {
+    o: Vec3A,
+    d: Vec3A,
+    rng: Sampler,
+    radiance: Vec3A,
+    beta: Vec3A,
+    segments: u32,
+    /// The last scattering was a delta (or the camera): emission found by it cannot have been
+    /// found by NEE, so it counts with full weight (this is what makes caustics).
+    specular: bool,
+    prev_p: Vec3A,
+    prev_pdf: f32,
+    done: bool,
+}
 
-    loop {
-        let Some((_, hit)) = geo.intersect_in(lanes, o, d, f32::INFINITY) else {
-            if has_env {
-                let w = if specular || !env_nee {
+impl Path {
+    /// A path leaving `o` along `d`, drawing from `rng`.
+    #[inline(always)]
+    fn new(o: Vec3A, d: Vec3A, rng: Sampler) -> Self {
+        Self {
+            o,
+            d,
+            rng,
+            radiance: Vec3A::ZERO,
+            beta: Vec3A::ONE,
+            segments: 1,
+            specular: true,
+            prev_p: o,
+            prev_pdf: 0.0,
+            done: false,
+        }
+    }
+}
+
+impl<'a> Tracer<'a> {
+    fn new(scene: &'a Scene, lanes: Option<&'a [QuadLanes]>, settings: &'a Settings) -> Self {
+        let lights = &scene.lights;
+        let has_env = lights.environment != Vec3A::ZERO;
+        Self {
+            scene,
+            lanes,
+            settings,
+            has_env,
+            env_nee: settings.nee && lights.environment_nee && has_env,
+        }
+    }
+
+    /// Row `y` of the image into `row` (RGB per pixel): each pixel's samples traced
+    /// `IN_FLIGHT` at a time, the rest one by one.
+    #[inline(always)]
+    fn row(&self, y: u32, row: &mut [f32]) {
+        let spp = self.settings.spp.max(1);
+        for x in 0..self.scene.camera.width {
+            let mut sum = Vec3A::ZERO;
+            // A NaN or infinity from a degenerate configuration must never reach the image:
+            // drop that sample (a zero-contribution sample, still counted). The samples are
+            // added in order.
+            let mut add = |l: Vec3A| {
+                if l.is_finite() {
+                    sum += l;
+                }
+            };
+            let mut s = 0;
+            while s + IN_FLIGHT <= spp {
+                let paths = std::array::from_fn(|k| self.camera_path(x, y, s + k as u32));
+                for l in self.trace_many::<{ IN_FLIGHT as usize }>(paths) {
+                    add(l);
+                }
+                s += IN_FLIGHT;
+            }
+            for s in s..spp {
+                add(self.trace(self.camera_path(x, y, s)));
+            }
+            let v = sum / spp as f32;
+            let i = 3 * x as usize;
+            row[i] = v.x;
+            row[i + 1] = v.y;
+            row[i + 2] = v.z;
+        }
+    }
+
+    /// Camera sample `s` of pixel (`x`, `y`): its stream and its jittered ray.
+    #[inline(always)]
+    fn camera_path(&self, x: u32, y: u32, s: u32) -> Path {
+        let camera = &self.scene.camera;
+        let mut rng = Sampler::new(self.settings.seed, y * camera.width + x, s);
+        let (jx, jy) = rng.next_2d();
+        Path::new(camera.origin(), camera.direction(x, y, jx, jy), rng)
+    }
+
+    /// Radiance of one camera sample: its path traced to the end.
+    #[inline(always)]
+    fn trace(&self, mut path: Path) -> Vec3A {
+        while !path.done {
+            self.segment(&mut path);
+        }
+        path.radiance
+    }
+
+    /// Radiance of `N` camera samples, their paths advanced in turn, a segment each (each
+    /// exactly as [`Tracer::trace`] would: the paths share nothing, so the bits are the same).
+    #[inline(always)]
+    fn trace_many<const N: usize>(&self, mut paths: [Path; N]) -> [Vec3A; N] {
+        while paths.iter().any(|p| !p.done) {
+            for path in paths.iter_mut().filter(|p| !p.done) {
+                self.segment(path);
+            }
+        }
+        paths.map(|p| p.radiance)
+    }
+
+    /// One segment of `path`: its closest hit, emission found there, and the scattering
+    /// (with next-event estimation) or the end of the path (`path.done`).
+    #[inline(always)]
+    fn segment(&self, path: &mut Path) {
+        let (scene, s) = (self.scene, self.settings);
+        let (geo, lights) = (&scene.geometry, &scene.lights);
+        let Some((_, hit)) = geo.intersect_in(self.lanes, path.o, path.d, f32::INFINITY) else {
+            if self.has_env {
+                let w = if path.specular || !self.env_nee {
                     1.0
                 } else {
                     // Both strategies are cosine-distributed about the same normal.
-                    power_heuristic(prev_pdf, prev_pdf)
+                    power_heuristic(path.prev_pdf, path.prev_pdf)
                 };
-                radiance += beta * env * w;
+                path.radiance += path.beta * lights.environment * w;
             }
-            break;
+            path.done = true;
+            return;
         };
 
         if hit.emission != Vec3A::ZERO {
-            let w = if specular || !s.nee {
+            let w = if path.specular || !s.nee {
                 1.0
             } else {
                 let k = hit.light as usize;
                 let light_pdf = lights.areas.get(k).map_or(0.0, |&q| {
-                    lights.area_pdf(&geo.quads[q as usize], prev_p, hit.p, d)
+                    lights.area_pdf(&geo.quads[q as usize], path.prev_p, hit.p, path.d)
                 });
-                power_heuristic(prev_pdf, light_pdf)
+                power_heuristic(path.prev_pdf, light_pdf)
             };
-            radiance += beta * hit.emission * w;
+            path.radiance += path.beta * hit.emission * w;
         }
 
-        if segments >= s.max_depth {
-            break;
+        if path.segments >= s.max_depth {
+            path.done = true;
+            return;
         }
 
-        match scene.materials[hit.material as usize] {
+        let scattered = match scene.materials[hit.material as usize] {
             Material::Diffuse { albedo, texture } => {
                 let albedo = match texture {
                     Some(t) => scene.textures[t as usize].sample(hit.uv),
                     None => albedo,
                 };
-                let n = if hit.n.dot(d) < 0.0 { hit.n } else { -hit.n };
-                let p = hit.p + offset(hit.p) * n;
-                if s.nee {
-                    let f = beta * albedo * FRAC_1_PI;
-                    for light in &lights.points {
-                        let to = light.position - p;
-                        let dist2 = to.length_squared();
-                        let dist = dist2.sqrt();
-                        let wi = to / dist;
-                        let cos = n.dot(wi);
-                        if cos > 0.0 && !geo.occluded_in(lanes, p, wi, dist * (1.0 - 1e-4)) {
-                            radiance += f * light.intensity * (cos / dist2);
-                        }
-                    }
-                    if !lights.areas.is_empty() {
-                        let u_pick = rng.next_f32();
-                        let (u1, u2) = rng.next_2d();
-                        if let Some(ls) = lights.sample_area(&geo.quads, p, u_pick, u1, u2) {
-                            let cos = n.dot(ls.dir);
-                            if cos > 0.0
-                                && !geo.occluded_in(lanes, p, ls.dir, ls.dist * (1.0 - 1e-4))
-                            {
-                                let w = power_heuristic(ls.pdf, cos * FRAC_1_PI);
-                                radiance += f * ls.radiance * (cos * w / ls.pdf);
-                            }
-                        }
-                    }
-                    if env_nee {
-                        let (u1, u2) = rng.next_2d();
-                        let wi = sample_cosine(n, u1, u2);
-                        if n.dot(wi) > 0.0 && !geo.occluded_in(lanes, p, wi, f32::INFINITY) {
-                            // f * L * cos / pdf with pdf = cos / pi, times the MIS weight.
-                            let pdf = n.dot(wi) * FRAC_1_PI;
-                            radiance += beta * albedo * env * power_heuristic(pdf, pdf);
-                        }
-                    }
-                }
-                let (u1, u2) = rng.next_2d();
-                let wi = sample_cosine(n, u1, u2);
-                let cos = n.dot(wi);
-                if cos <= 0.0 {
-                    break;
-                }
-                beta *= albedo;
-                prev_pdf = cos * FRAC_1_PI;
-                prev_p = p;
-                specular = false;
-                o = p;
-                d = wi;
+                self.diffuse(path, &hit, albedo)
             }
             Material::Dielectric { ior } => {
-                let (wi, scale, _) = scatter_dielectric(d, hit.n, ior, rng.next_f32());
-                beta *= scale;
+                let (wi, scale, _) = scatter_dielectric(path.d, hit.n, ior, path.rng.next_f32());
+                path.beta *= scale;
                 let side = if wi.dot(hit.n) > 0.0 { hit.n } else { -hit.n };
-                o = hit.p + offset(hit.p) * side;
-                d = wi;
-                specular = true;
+                path.o = hit.p + offset(hit.p) * side;
+                path.d = wi;
+                path.specular = true;
+                true
             }
+        };
+        if !scattered {
+            path.done = true;
+            return;
         }
 
-        segments += 1;
-        if segments > 3 {
-            let q = beta.max_element().min(0.95);
-            if rng.next_f32() >= q {
-                break;
+        path.segments += 1;
+        if path.segments > 3 {
+            let q = path.beta.max_element().min(0.95);
+            if path.rng.next_f32() >= q {
+                path.done = true;
+                return;
             }
-            beta /= q;
+            path.beta /= q;
         }
     }
-    radiance
+
+    /// Next-event estimation at a diffuse hit and the cosine-sampled continuation; false
+    /// when the sampled direction is unusable (the path ends).
+    #[inline(always)]
+    fn diffuse(&self, path: &mut Path, hit: &Surface, albedo: Vec3A) -> bool {
+        let n = if hit.n.dot(path.d) < 0.0 {
+            hit.n
+        } else {
+            -hit.n
+        };
+        let p = hit.p + offset(hit.p) * n;
+        if self.settings.nee {
+            self.next_event(path, p, n, albedo);
+        }
+        let (u1, u2) = path.rng.next_2d();
+        let wi = sample_cosine(n, u1, u2);
+        let cos = n.dot(wi);
+        if cos <= 0.0 {
+            return false;
+        }
+        path.beta *= albedo;
+        path.prev_pdf = cos * FRAC_1_PI;
+        path.prev_p = p;
+        path.specular = false;
+        path.o = p;
+        path.d = wi;
+        true
+    }
+
+    /// Light sampled from the diffuse point `p` (normal `n` facing the incoming ray): every
+    /// point light, one area light (MIS-weighted) and the environment when it is sampled.
+    #[inline(always)]
+    fn next_event(&self, path: &mut Path, p: Vec3A, n: Vec3A, albedo: Vec3A) {
+        let geo = &self.scene.geometry;
+        let lights = &self.scene.lights;
+        let lanes = self.lanes;
+        let f = path.beta * albedo * FRAC_1_PI;
+        for light in &lights.points {
+            let to = light.position - p;
+            let dist2 = to.length_squared();
+            let dist = dist2.sqrt();
+            let wi = to / dist;
+            let cos = n.dot(wi);
+            if cos > 0.0 && !geo.occluded_in(lanes, p, wi, dist * (1.0 - 1e-4)) {
+                path.radiance += f * light.intensity * (cos / dist2);
+            }
+        }
+        if !lights.areas.is_empty() {
+            let u_pick = path.rng.next_f32();
+            let (u1, u2) = path.rng.next_2d();
+            if let Some(ls) = lights.sample_area(&geo.quads, p, u_pick, u1, u2) {
+                let cos = n.dot(ls.dir);
+                if cos > 0.0 && !geo.occluded_in(lanes, p, ls.dir, ls.dist * (1.0 - 1e-4)) {
+                    let w = power_heuristic(ls.pdf, cos * FRAC_1_PI);
+                    path.radiance += f * ls.radiance * (cos * w / ls.pdf);
+                }
+            }
+        }
+        if self.env_nee {
+            let (u1, u2) = path.rng.next_2d();
+            let wi = sample_cosine(n, u1, u2);
+            if n.dot(wi) > 0.0 && !geo.occluded_in(lanes, p, wi, f32::INFINITY) {
+                // f * L * cos / pdf with pdf = cos / pi, times the MIS weight.
+                let pdf = n.dot(wi) * FRAC_1_PI;
+                path.radiance +=
+                    path.beta * albedo * lights.environment * power_heuristic(pdf, pdf);
+            }
+        }
+    }
 }

@@ -10,8 +10,13 @@ pub mod integrator;
 mod lanes;
 pub mod light;
 pub mod material;
+mod packed;
+mod pairs;
 pub mod rng;
+mod tri_lanes;
 
+#[cfg(test)]
+mod pinned;
 #[cfg(test)]
 mod tests;
 

@@ -1,0 +1,77 @@
+//! A mesh's fast ray queries: its obvhs [`Bvh2`] in the pair layout ([`PairBvh`], obvhs's
+//! order) and each leaf's triangles packed four to a [`TriLanes`]. Every answer is obvhs's,
+//! bit for bit (tested against it in `geometry`'s tests).
+
+use glam::Vec3A;
+use obvhs::{bvh2::Bvh2, ray::Ray};
+
+use super::pairs::PairBvh;
+use super::tri_lanes::{RayLanes, TriLanes};
+
+/// The trees and packed triangles of one mesh; a leaf's `first` is its first pack.
+pub struct PackedMesh {
+    pairs: PairBvh,
+    packs: Vec<TriLanes>,
+}
+
+impl PackedMesh {
+    /// From `bvh` and its triangles in its primitive order, each as (v0, e1, e2, e1 x e2) of
+    /// obvhs's Möller-Trumbore test; None when the pair layout does not take the tree.
+    pub fn new(bvh: &Bvh2, tris: &[[Vec3A; 4]]) -> Option<Self> {
+        let mut packs = Vec::new();
+        let pairs = PairBvh::with_leaves(bvh, |first, count| {
+            let at = packs.len() as u32;
+            let leaf = &tris[first as usize..(first + count) as usize];
+            for (k, four) in leaf.chunks(4).enumerate() {
+                packs.push(TriLanes::pack(first + 4 * k as u32, four));
+            }
+            at
+        })?;
+        Some(Self { pairs, packs })
+    }
+
+    /// The packs of a leaf whose first pack is `first` and which holds `count` triangles.
+    #[inline(always)]
+    fn leaf(&self, first: u32, count: u32) -> &[TriLanes] {
+        &self.packs[first as usize..(first + count.div_ceil(4)) as usize]
+    }
+
+    /// Closest (distance, triangle) as obvhs's `Bvh2::ray_traverse`: each lane that hits
+    /// closer than the closest so far replaces it, in the leaf's order, as obvhs's loop does.
+    #[inline(always)]
+    pub fn closest(&self, mut ray: Ray) -> Option<(f32, u32)> {
+        let lanes = RayLanes::new(ray.origin, ray.direction);
+        let mut found = None;
+        self.pairs.traverse(&mut ray, |ray, first, count| {
+            for pack in self.leaf(first, count) {
+                let (t, mut hits) = pack.distances(&lanes, ray.tmin);
+                while hits != 0 {
+                    let k = hits.trailing_zeros();
+                    hits &= hits - 1;
+                    if t[k as usize] < ray.tmax {
+                        ray.tmax = t[k as usize];
+                        found = Some(pack.first() + k);
+                    }
+                }
+            }
+            true
+        });
+        found.map(|id| (ray.tmax, id))
+    }
+
+    /// Whether a triangle lies on the ray before `ray.tmax`, as obvhs's
+    /// `Bvh2::ray_traverse_miss` (negated).
+    #[inline(always)]
+    pub fn any(&self, mut ray: Ray) -> bool {
+        let lanes = RayLanes::new(ray.origin, ray.direction);
+        let mut hit = false;
+        self.pairs.traverse(&mut ray, |ray, first, count| {
+            hit = self.leaf(first, count).iter().any(|pack| {
+                let (t, hits) = pack.distances(&lanes, ray.tmin);
+                (0..4).any(|k| hits & (1 << k) != 0 && t[k] < ray.tmax)
+            });
+            !hit
+        });
+        hit
+    }
+}
