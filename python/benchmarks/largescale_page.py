@@ -290,6 +290,7 @@ SEED_LABELS = {
     "guard": "TPA only where CSA agrees",
     "warm": "TPA warm-up, then CSA (default)",
     "tpa-rates": "TPA and sep-CMA-ES's rates",
+    "nopair": "the warm-up without the two points after it",
 }
 
 
