@@ -181,28 +181,30 @@ def plot(rows: list[Row], path: str) -> None:
     fig.savefig(path, dpi=90)
 
 
-def csa_time_scale(n: int) -> tuple[int, float, float]:
+def csa_time_scale(n: int) -> tuple[int, float, float, float]:
     """The default population, and the fewest evaluations per e-fold decrease of sigma under
     cumulative step-size adaptation (its log-step is ``cs / ds (|p_s| / chi_n - 1) >= -cs / ds``
-    per generation) and under the median success rule (``s / d >= -1 / d`` per generation,
-    ``d = 2 (n - 1) / n``), with the constants of ``src/method/adaptive/gaussian.rs``."""
+    per generation), under the median success rule (``s / d >= -1 / d`` per generation,
+    ``d = 2 (n - 1) / n``), with the constants of ``src/method/adaptive/gaussian.rs``, and under
+    two-point step-size adaptation (``s / d >= -1 / d``, ``d = 0.7 + 2 ln n``, pycma's damping)."""
     lam = 4 + int(3 * math.log(n))
     mu = lam // 2
     raw = [math.log((lam + 1) / 2) - math.log(i + 1) for i in range(mu)]
     mueff = sum(raw) ** 2 / sum(w * w for w in raw)
     cs = (mueff + 2) / (n + mueff + 5)
     ds = 1 + 2 * max(0.0, math.sqrt((mueff - 1) / (n + 1)) - 1) + cs
-    return lam, lam * ds / cs, lam * max(2 * (n - 1) / n, 1.0)
+    tpa = 0.7 + 2 * math.log(n) + 2 * math.log(max(1, lam - n))
+    return lam, lam * ds / cs, lam * max(2 * (n - 1) / n, 1.0), lam * tpa
 
 
 def time_scales() -> list[str]:
     lines = [
-        "| n | population | evaluations per e-fold of sigma, at least: cumulative step-size adaptation | median success rule |",
-        "|---|---|---|---|",
+        "| n | population | evaluations per e-fold of sigma, at least: cumulative step-size adaptation | median success rule | two-point adaptation |",
+        "|---|---|---|---|---|",
     ]
     for n in [20, 160] + SIZES:
-        lam, csa, msr = csa_time_scale(n)
-        lines.append(f"| {n:,} | {lam} | {csa:,.0f} | {msr:,.0f} |")
+        lam, csa, msr, tpa = csa_time_scale(n)
+        lines.append(f"| {n:,} | {lam} | {csa:,.0f} | {msr:,.0f} | {tpa:,.0f} |")
     return lines
 
 
@@ -211,7 +213,7 @@ def tried_table(default: list[Row], tried: dict[str, list[Row]]) -> list[str]:
     size and budget."""
     cells = {label: texture_cells(rows) for label, rows in tried.items()}
     base = texture_cells(default)
-    head = "| n | evaluations | default (cumulative step-size adaptation) | " + " | ".join(f"tried: {k}" for k in tried) + " |"
+    head = "| n | evaluations | default (TPA warm-up, then CSA) | " + " | ".join(f"tried: {k}" for k in tried) + " |"
     lines = [head, "|---|---|---|" + "---|" * len(tried)]
     for n in SIZES:
         for budget in BUDGETS:
@@ -223,17 +225,22 @@ def tried_table(default: list[Row], tried: dict[str, list[Row]]) -> list[str]:
     return lines
 
 
-def bbob_before_after(before: list[Row], after: list[Row]) -> list[str]:
-    """``minimize`` on bbob-largescale as it is (``before``) and with a variant tried
-    (``after``), where both ran."""
+def bbob_before_after(before: list[Row], after: dict[str, list[Row]]) -> list[str]:
+    """``minimize`` on bbob-largescale as it is (``before``) and with each variant tried
+    (``after``, by label), where all ran."""
     b = {(int(r["n"]), int(r["function"])): r for r in before if r["method"] == "minimize"}
-    a = {(int(r["n"]), int(r["function"])): r for r in after if r["method"] == "minimize"}
-    keys = sorted(set(b) & set(a))
+    a = {
+        label: {(int(r["n"]), int(r["function"])): r for r in rows if r["method"] == "minimize"}
+        for label, rows in after.items()
+    }
+    keys = sorted(k for k in b if any(k in v for v in a.values()))
     if not keys:
-        return ["(no runs of the variant on bbob-largescale)"]
+        return ["(no runs of the variants on bbob-largescale)"]
     lines = [
-        "| n | f | default: best - f_opt (targets; evaluations) | tried: best - f_opt (targets; evaluations) |",
-        "|---|---|---|---|",
+        "| n | f | default: best - f_opt (targets; evaluations) | "
+        + " | ".join(f"tried: {label}" for label in a)
+        + " |",
+        "|---|---|---|" + "---|" * len(a),
     ]
 
     def cell(r: Row) -> str:
@@ -241,12 +248,50 @@ def bbob_before_after(before: list[Row], after: list[Row]) -> list[str]:
         return f"{fmt(max(float(r['best_minus_opt']), 0.0))} ({r['targets_reached']}; {int(r['evaluations']):,}{cap})"
 
     for k in keys:
-        cells = [cell(r) for r in (b[k], a[k])]
+        cells = [cell(b[k])] + [cell(v[k]) if k in v else "not run" for v in a.values()]
         lines.append(f"| {k[0]} | f{k[1]} | " + " | ".join(cells) + " |")
-    tb = sum(int(b[k]["targets_reached"]) for k in keys)
-    ta = sum(int(a[k]["targets_reached"]) for k in keys)
-    lines.append(f"| all | {len(keys)} | {tb / (11 * len(keys)):.3f} | {ta / (11 * len(keys)):.3f} |")
+
+    def score(t: dict[tuple[int, int], Row]) -> str:
+        if not all(k in t for k in keys):
+            return "-"
+        return f"{sum(int(t[k]['targets_reached']) for k in keys) / (11 * len(keys)):.3f}"
+
+    lines.append(f"| all | {len(keys)} | " + " | ".join(score(t) for t in [b, *a.values()]) + " |")
     return lines
+
+
+def seeds_table(rows: list[Row]) -> list[str]:
+    """``minimize`` with each step-size rule over seeds on one bbob-largescale problem
+    (``largescale_seeds.py``): best - f_opt at 30,000 evaluations and at the end (targets
+    reached at the end), one cell per seed."""
+    by_seed: dict[tuple[str, str, str, str], dict[str, tuple[str, str]]] = defaultdict(dict)
+    for r in rows:
+        key = (r["label"], r["f"], r["n"], r["instance"])
+        ev = int(r["evaluations"])
+        early, end = by_seed[key].get(r["seed"], ("-", "-"))
+        if ev == 30_000:
+            early = fmt(max(float(r["best_minus_opt"]), 0.0))
+        end = f"{fmt(max(float(r['best_minus_opt']), 0.0))} ({r['targets']}; {ev:,})"
+        by_seed[key][r["seed"]] = (early, end)
+    seeds = sorted({r["seed"] for r in rows}, key=int)
+    lines = [
+        "| f | n | step-size rule | " + " | ".join(f"seed {s}: at 30,000 / at the end (targets; evaluations)" for s in seeds) + " |",
+        "|---|---|---|" + "---|" * len(seeds),
+    ]
+    for (label, f, n, _inst), cells in sorted(by_seed.items(), key=lambda kv: (int(kv[0][1]), int(kv[0][2]), kv[0][0])):
+        shown = [" / ".join(cells[s]) if s in cells else "not run" for s in seeds]
+        lines.append(f"| f{f} | {n} | {SEED_LABELS.get(label, label)} | " + " | ".join(shown) + " |")
+    return lines
+
+
+SEED_LABELS = {
+    "csa": "CSA alone (the default before)",
+    "tpa": "two-point step-size adaptation",
+    "guard": "TPA only where CSA agrees",
+    "warm": "TPA warm-up, then CSA (default)",
+    "tpa-rates": "TPA and sep-CMA-ES's rates",
+    "nopair": "the warm-up without the two points after it",
+}
 
 
 def overhead(rows: list[Row]) -> list[str]:
@@ -335,17 +380,30 @@ def main() -> None:
     table, missing = texture_table(rows)
     template = open(os.path.join(os.path.dirname(__file__), "largescale_page.md")).read()
     tried = {
+        "CSA alone (the default before)": read(glob.glob(os.path.join(out, "tried-csa-texture*.csv"))),
         "median success rule": read(glob.glob(os.path.join(out, "tried-msr-texture*.csv"))),
         "median success rule and sep-CMA-ES's rates": read(glob.glob(os.path.join(out, "tried-msr-rates-texture*.csv"))),
+        "two-point step-size adaptation (TPA)": read(glob.glob(os.path.join(out, "tried-tpa-texture*.csv"))),
+        "TPA only where CSA agrees": read(glob.glob(os.path.join(out, "tried-tpaguard-texture*.csv"))),
+        "the warm-up without the two points after it": read(glob.glob(os.path.join(out, "tried-nopair-texture*.csv"))),
     }
     tried = {k: v for k, v in tried.items() if v}
-    tried_bbob = read(sorted(glob.glob(os.path.join(out, "tried-msr-bbob*.csv"))))
+    tried_bbob = {
+        "CSA alone (before)": read(sorted(glob.glob(os.path.join(out, "tried-csa-bbob*.csv")))),
+        "median success rule": read(sorted(glob.glob(os.path.join(out, "tried-msr-bbob*.csv")))),
+        "TPA": read(sorted(glob.glob(os.path.join(out, "tried-tpa-bbob*.csv")))),
+        "the warm-up without the two points after it": read(sorted(glob.glob(os.path.join(out, "tried-nopair-bbob*.csv")))),
+    }
+    tried_bbob = {k: v for k, v in tried_bbob.items() if v}
+    seeds_path = os.path.join(out, "tried-seeds-bbob.csv")
+    seeds = read([seeds_path]) if os.path.exists(seeds_path) else []
     overhead_path = os.path.join(out, "overhead.csv")
     text = template.format(
         command=command,
         time_scales="\n".join(time_scales()),
         tried="\n".join(tried_table(rows, tried)) if tried else "(no variant ran)",
         bbob_tried="\n".join(bbob_before_after(bbob, tried_bbob)),
+        bbob_seeds="\n".join(seeds_table(seeds)) if seeds else "(not run)",
         overhead="\n".join(overhead(read([overhead_path]) if os.path.exists(overhead_path) else [])),
         table="\n".join(table),
         plot=os.path.basename(png),
