@@ -301,15 +301,19 @@ impl BoxSet {
         &self.boxes
     }
 
+    /// The distance to box `id` along `r` before `r.tmax` (infinity for a miss): the
+    /// primitive test of both queries.
+    #[inline(always)]
+    fn hit(&self, r: &BvhRay, id: usize) -> f32 {
+        let b = &self.boxes[id];
+        slab(r.origin, r.inv_direction, b.min, b.max, r.tmax)
+    }
+
     /// Closest (distance, box) on the ray before `tmax`.
     #[inline(always)]
     fn closest(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, u32)> {
         let ray = BvhRay::new(o, d, T_MIN, tmax);
-        let boxes = &self.boxes;
-        let test = |r: &BvhRay, id: usize| {
-            let b = &boxes[id];
-            slab(r.origin, r.inv_direction, b.min, b.max, r.tmax)
-        };
+        let test = |r: &BvhRay, id: usize| self.hit(r, id);
         if let Some(pairs) = &self.pairs {
             return pairs.closest(ray, test);
         }
@@ -323,11 +327,7 @@ impl BoxSet {
     #[inline(always)]
     fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
         let ray = BvhRay::new(o, d, T_MIN, tmax);
-        let boxes = &self.boxes;
-        let test = |r: &BvhRay, id: usize| {
-            let b = &boxes[id];
-            slab(r.origin, r.inv_direction, b.min, b.max, r.tmax)
-        };
+        let test = |r: &BvhRay, id: usize| self.hit(r, id);
         match &self.pairs {
             Some(pairs) => pairs.any(ray, test),
             None => !self.bvh.ray_traverse_miss(ray, test),
@@ -421,23 +421,10 @@ impl Mesh {
         let mut unused = std::time::Duration::default();
         let params = BvhBuildParams::medium_build();
         let (accel, order) = match kind {
-            BvhKind::Bvh2Obvhs => {
+            BvhKind::Bvh2 | BvhKind::Bvh2Obvhs => {
                 let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(tris, params, &mut unused);
                 let order = bvh.primitive_indices.clone();
                 (Accel::Bvh2(bvh), order)
-            }
-            BvhKind::Bvh2 => {
-                let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(tris, params, &mut unused);
-                let order = bvh.primitive_indices.clone();
-                let parts: Vec<[Vec3A; 4]> = order
-                    .iter()
-                    .map(|&i| PreparedTriangle::new(&tris[i as usize]).parts())
-                    .collect();
-                let accel = match PackedMesh::new(&bvh, &parts) {
-                    Some(packed) => Accel::Packed(packed),
-                    None => Accel::Bvh2(bvh),
-                };
-                (accel, order)
             }
             BvhKind::CwBvh => {
                 let bvh = build_cwbvh_from_tris(tris, params, &mut unused);
@@ -446,7 +433,15 @@ impl Mesh {
             }
         };
         let tris: Vec<Triangle> = order.iter().map(|&i| tris[i as usize]).collect();
-        let prepared = tris.iter().map(PreparedTriangle::new).collect();
+        let prepared: Vec<PreparedTriangle> = tris.iter().map(PreparedTriangle::new).collect();
+        // The default re-lays the Bvh2 for its own traversal, from the triangles just prepared.
+        let accel = match accel {
+            Accel::Bvh2(bvh) if kind == BvhKind::Bvh2 => {
+                let parts: Vec<[Vec3A; 4]> = prepared.iter().map(PreparedTriangle::parts).collect();
+                PackedMesh::new(&bvh, &parts).map_or(Accel::Bvh2(bvh), Accel::Packed)
+            }
+            other => other,
+        };
         Self {
             tris,
             prepared,

@@ -63,6 +63,7 @@ where
     let mut objective = Recording {
         run,
         loss,
+        target: task.target(),
         budget,
         best: RefCell::new((f64::INFINITY, start.to_vec())),
         evaluations: Cell::new(0),
@@ -183,6 +184,8 @@ const FNV_START: u64 = 0xcbf2_9ce4_8422_2325;
 struct Recording<'a, L> {
     run: &'a Run<'a>,
     loss: &'a L,
+    /// The task's target, made once.
+    target: Vec<f64>,
     budget: usize,
     /// The best value and point so far.
     best: RefCell<(f64, Vec<f64>)>,
@@ -351,7 +354,7 @@ impl<L: Fn(&[f64], u64) -> f64> Recording<'_, L> {
             iteration,
             sigma: spread,
             loss: mean_value,
-            param_mse: self.run.task.param_mse(&best.1),
+            param_mse: self.run.task.param_mse_to(&best.1, &self.target),
             image_mse,
             // Every value logged was rendered once (by this run or the one it continues).
             renders: self.log.borrow().len(),

@@ -45,6 +45,7 @@ pub(super) fn run(run: &Run<'_>, render_time: &Cell<Duration>) -> Result<Finishe
     let mut method = options.ask_tell(start)?;
     let reference = &run.reference.data;
     let m = reference.len();
+    let target = task.target();
     let bar = progress_bar(task.name(), budget, run.ctl.progress);
     let clock = Instant::now();
     let (mut history, mut kept) = (Vec::new(), vec![start.to_vec()]);
@@ -69,7 +70,7 @@ pub(super) fn run(run: &Run<'_>, render_time: &Cell<Duration>) -> Result<Finishe
             iteration: method.evaluations(),
             sigma: method.sigma(),
             loss: mse,
-            param_mse: task.param_mse(method.theta()),
+            param_mse: task.param_mse_to(method.theta(), &target),
             image_mse: Some(mse),
             // Every render is the method's own; the image MSE is that of the point just
             // evaluated, so no render is spent on evaluation alone.

@@ -487,6 +487,8 @@ struct Recorder<'a> {
     task: &'a Task,
     s: &'a Settings,
     reference: &'a Image,
+    /// The task's target, made once.
+    target: Vec<f64>,
     snapshot_at: Vec<usize>,
     snapshots: Vec<Vec<f64>>,
     history: Vec<Row>,
@@ -514,6 +516,7 @@ impl<'a> Recorder<'a> {
             task,
             s,
             reference,
+            target: task.target(),
             // k * (iterations - 1) / 5 without overflow, whatever the count.
             snapshot_at: (0..6u128)
                 .map(|k| (k * s.iterations.saturating_sub(1) as u128 / 5) as usize)
@@ -567,7 +570,7 @@ impl<'a> Recorder<'a> {
             iteration: step.iteration,
             sigma: step.sigma,
             loss: step.estimate.mean_value,
-            param_mse: self.task.param_mse(step.theta),
+            param_mse: self.task.param_mse_to(step.theta, &self.target),
             image_mse,
             renders: self.renders.get(),
             eval_renders: eval_renders + usize::from(image_mse.is_some()),
@@ -637,9 +640,9 @@ fn summarize(
         renders_to_paper: None,
         evaluation_renders: 0,
         reference_renders: 0,
-        initial_param_mse: task.param_mse(&start),
+        initial_param_mse: task.param_mse_to(&start, &target),
         initial_image_mse: initial.mse(reference),
-        param_mse: task.param_mse(final_theta),
+        param_mse: task.param_mse_to(final_theta, &target),
         image_mse: final_image.mse(reference),
         image_mse_other_seed,
         seconds_per_iteration: seconds_total / done,

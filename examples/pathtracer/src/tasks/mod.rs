@@ -306,7 +306,17 @@ impl Task {
     /// The reported parameter error of `theta`: [`param_mse`] of its [`Task::canonical`]
     /// form against the target.
     pub fn param_mse(&self, theta: &[f64]) -> f64 {
-        param_mse(&self.canonical(theta), &self.target())
+        self.param_mse_to(theta, &self.target())
+    }
+
+    /// [`Task::param_mse`] against `target`, the task's target made once by the caller: a
+    /// run's recorder measures every iteration, and TEXTURE builds its 49,152 target texels
+    /// procedurally. Without periodic parameters `theta` is not copied.
+    pub fn param_mse_to(&self, theta: &[f64], target: &[f64]) -> f64 {
+        if self.periodic().is_empty() {
+            return param_mse(theta, target);
+        }
+        param_mse(&self.canonical(theta), target)
     }
 
     /// Longest path, in segments (2 = direct light only).
