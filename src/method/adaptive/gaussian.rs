@@ -194,6 +194,10 @@ pub(crate) struct Tpa {
     /// The warm-up has ended: `sigma` follows CSA for the rest of the run.
     #[cfg_attr(feature = "serde", serde(default))]
     warmed: bool,
+    /// The warm-up ended with the last update, until [`SearchGaussian::warm_up_ended`] reads
+    /// it.
+    #[cfg_attr(feature = "serde", serde(default))]
+    ended: bool,
 }
 
 /// TPA's smoothing weight of the newest rank difference.
@@ -371,14 +375,29 @@ impl SearchGaussian {
         // The warm-up ends for good the first time the forward point ranks better on
         // average: sigma is no longer too large, and CSA, slower, keeps it wide on
         // multimodal functions from there on (TPA alone lost Rastrigin's target).
-        if self.tpa.s > 0.0 {
+        if self.tpa.s > 0.0 && !self.tpa.warmed {
             self.tpa.warmed = true;
+            self.tpa.ended = true;
         }
         if self.tpa.warmed {
             csa
         } else {
             tpa
         }
+    }
+
+    /// Whether the warm-up ended with the last update (true once).
+    pub fn warm_up_ended(&mut self) -> bool {
+        std::mem::take(&mut self.tpa.ended)
+    }
+
+    /// Moves the mean to `x` with the spread and scales learned so far; the evolution paths
+    /// and the last mean shift led to the old mean, so they are cleared.
+    pub fn recentre(&mut self, x: &[f64]) {
+        self.mean = DVector::from_column_slice(x);
+        self.ps.fill(0.0);
+        self.pc.fill(0.0);
+        self.tpa.shift = None;
     }
 
     /// The point of offset `y`.
