@@ -213,7 +213,7 @@ def tried_table(default: list[Row], tried: dict[str, list[Row]]) -> list[str]:
     size and budget."""
     cells = {label: texture_cells(rows) for label, rows in tried.items()}
     base = texture_cells(default)
-    head = "| n | evaluations | default (TPA warm-up, then CSA) | " + " | ".join(f"tried: {k}" for k in tried) + " |"
+    head = "| n | evaluations | default (TPA warm-up, back to the start if it beat nothing, then CSA) | " + " | ".join(f"tried: {k}" for k in tried) + " |"
     lines = [head, "|---|---|---|" + "---|" * len(tried)]
     for n in SIZES:
         for budget in BUDGETS:
@@ -285,10 +285,15 @@ def seeds_table(rows: list[Row]) -> list[str]:
 
 
 SEED_LABELS = {
-    "csa": "CSA alone (the default before)",
+    "csa": "CSA alone (the default before the warm-up)",
     "tpa": "two-point step-size adaptation",
     "guard": "TPA only where CSA agrees",
-    "warm": "TPA warm-up, then CSA (default)",
+    "warm": "TPA warm-up, then CSA (the default before)",
+    "start": "TPA warm-up, back to the start if it beat nothing, then CSA (default)",
+    "nocov": "warm-up; the two points out of the covariance update",
+    "rates": "warm-up; the two points out of the covariance update; sep-CMA-ES's rates",
+    "wrates": "warm-up; sep-CMA-ES's rates",
+    "rates-start": "the default with the two points out of the covariance update and sep-CMA-ES's rates",
     "tpa-rates": "TPA and sep-CMA-ES's rates",
     "nopair": "the warm-up without the two points after it",
 }
@@ -380,7 +385,8 @@ def main() -> None:
     table, missing = texture_table(rows)
     template = open(os.path.join(os.path.dirname(__file__), "largescale_page.md")).read()
     tried = {
-        "CSA alone (the default before)": read(glob.glob(os.path.join(out, "tried-csa-texture*.csv"))),
+        "TPA warm-up, then CSA (the default before)": read(glob.glob(os.path.join(out, "tried-warm-texture*.csv"))),
+        "CSA alone (the default before the warm-up)": read(glob.glob(os.path.join(out, "tried-csa-texture*.csv"))),
         "median success rule": read(glob.glob(os.path.join(out, "tried-msr-texture*.csv"))),
         "median success rule and sep-CMA-ES's rates": read(glob.glob(os.path.join(out, "tried-msr-rates-texture*.csv"))),
         "two-point step-size adaptation (TPA)": read(glob.glob(os.path.join(out, "tried-tpa-texture*.csv"))),
@@ -389,7 +395,8 @@ def main() -> None:
     }
     tried = {k: v for k, v in tried.items() if v}
     tried_bbob = {
-        "CSA alone (before)": read(sorted(glob.glob(os.path.join(out, "tried-csa-bbob*.csv")))),
+        "TPA warm-up, then CSA (before)": read(sorted(glob.glob(os.path.join(out, "tried-warm-bbob*.csv")))),
+        "CSA alone (before the warm-up)": read(sorted(glob.glob(os.path.join(out, "tried-csa-bbob*.csv")))),
         "median success rule": read(sorted(glob.glob(os.path.join(out, "tried-msr-bbob*.csv")))),
         "TPA": read(sorted(glob.glob(os.path.join(out, "tried-tpa-bbob*.csv")))),
         "the warm-up without the two points after it": read(sorted(glob.glob(os.path.join(out, "tried-nopair-bbob*.csv")))),
