@@ -17,7 +17,8 @@
 //! which is what ill-conditioned and rotated problems need. There is no floor on `sigma`.
 //! With the diagonal metric (large n) each run opens with a warm-up of two-point step-size
 //! adaptation that shrinks a start spread far too wide in `O(ln n)` generations per e-fold
-//! ([`Tpa`]), then CSA as above.
+//! ([`Tpa`]), then CSA as above; a run whose warm-up drew nothing better than the best value
+//! seen before it goes on from its start point with the spread found (`mod.rs`).
 //!
 //! Two rules are this crate's own, for plateaus:
 //! - **flat generation**: when the best quarter of a generation ties with its best value, the
