@@ -1,8 +1,8 @@
 //! `seeds`: several seeds studies (directories of runs as `all --seeds K` leaves them) side
 //! by side on one page: per task, each seed's final parameter MSE under each method, how many
 //! reach the paper's, the median and the range, the same for the final image MSE, the renders
-//! of the objective at which the parameter MSE first reached the paper's, and the seconds per
-//! iteration.
+//! of the objective at which the parameter MSE first reached the paper's and from which it
+//! stayed there, and the seconds per iteration.
 
 use std::path::{Path, PathBuf};
 
@@ -69,9 +69,9 @@ fn page(dirs: &[PathBuf]) -> String {
     for task in tasks::all() {
         let columns: Vec<Vec<Option<run::Summary>>> =
             dirs.iter().map(|d| study(d, task.name())).collect();
-        // Per column, per seed found: the renders to the paper's parameter MSE (None: never),
-        // or why they cannot be counted.
-        let counts: Vec<Vec<std::result::Result<Option<usize>, String>>> = columns
+        // Per column, per seed found: the renders to the paper's parameter MSE, or why they
+        // cannot be counted.
+        let counts: Vec<Vec<std::result::Result<Reach, String>>> = columns
             .iter()
             .zip(dirs)
             .map(|(c, d)| {
@@ -81,7 +81,7 @@ fn page(dirs: &[PathBuf]) -> String {
                         let dir = run_dir(d, task.name(), k);
                         let counted = c[k]
                             .as_ref()
-                            .map_or(Ok(None), |s| renders_to_paper(&dir, &task, s));
+                            .map_or(Ok(Reach::NEVER), |s| renders_to_paper(&dir, &task, s));
                         if let Err(why) = &counted {
                             eprintln!("renders not countable: {why}");
                         }
@@ -144,7 +144,13 @@ fn page(dirs: &[PathBuf]) -> String {
             rows.push(row);
             let mut row =
                 vec!["renders to the paper's parameter MSE: median [min, max]".to_string()];
-            row.extend(counts.iter().map(|c| renders_cell(c)));
+            row.extend(counts.iter().map(|c| renders_cell(c, |r| r.first)));
+            rows.push(row);
+            let mut row = vec![
+                "renders from which it stays at the paper's parameter MSE: median [min, max]"
+                    .to_string(),
+            ];
+            row.extend(counts.iter().map(|c| renders_cell(c, |r| r.kept)));
             rows.push(row);
         }
         rows.push(footer("renders of the objective per run (median)", &|c| {
@@ -169,33 +175,56 @@ fn page(dirs: &[PathBuf]) -> String {
         ));
         md.push_str(&report::markdown_table(&header, &rows));
     }
-    md.push_str("\nRenders to the paper's parameter MSE: the renders of the objective (every evaluation of the loss; not the evaluation-only renders of the image MSE, nor the reference) at the end of the first iteration whose parameter MSE (of the current point in the paper's loop, of the best point so far in the adaptive search and the polish) is at or below the paper's. The median is over every seed run, a run that never reached it counted as never (so the median is \"never\" when fewer than half reached it); the range runs from the fewest renders to the most, \"never\" included. They come from each run's `history.csv` (its `renders` column) or, for runs written before the runs counted, are derived from the run's `checkpoint.json` without rendering: the paper's loop spends the same number of renders every iteration, and the adaptive search is replayed from the checkpoint's values, the replay checked to ask for the very points the run asked for (`pathtracer::run::recount`). A run is \"not countable\" when its history has no renders and neither derivation holds: no checkpoint, or a search that this build does not replay to the same points (the search changed since the run); such runs must be made again to be counted (the command prints why for each).\n");
+    md.push_str("\nRenders to the paper's parameter MSE: the renders of the objective (every evaluation of the loss; not the evaluation-only renders of the image MSE, nor the reference) at the end of the first iteration whose parameter MSE (of the current point in the paper's loop, of the best point so far in the adaptive search and the polish) is at or below the paper's; \"stays\": the renders at the end of the first iteration from which every later one is at or below it (a loop whose current point swings through the target and out again reaches it early and stays late). The median is over every seed run, a run that never reached it counted as never (so the median is \"never\" when fewer than half reached it); the range runs from the fewest renders to the most, \"never\" included. They come from each run's `history.csv` (its `renders` column) or, for runs written before the runs counted, are derived from the run's `checkpoint.json` without rendering: the paper's loop spends the same number of renders every iteration, and the adaptive search is replayed from the checkpoint's values, the replay checked to ask for the very points the run asked for (`pathtracer::run::recount`). A run is \"not countable\" when its history has no renders and neither derivation holds: no checkpoint, or a search that this build does not replay to the same points (the search changed since the run); such runs must be made again to be counted (the command prints why for each).\n");
     md.push_str("\nSeconds per iteration are wall-clock on a shared 2-core machine: an iteration of the adaptive search and of the polish is a generation (several renders), of the paper's loop one estimate (N renders); compare them only within a column.\n");
     md
 }
 
-/// The renders of the objective at which the run in `dir` first reached the paper's parameter
-/// MSE for `task` (`Ok(None)`: never), from its `history.csv`, else derived: for the paper's
-/// loop from its summary ([`run::loop_renders`]), for the adaptive search and the polish from
-/// its checkpoint ([`run::recount`]); why not, if none of these can tell.
+/// When a run reached the paper's parameter MSE, in renders of the objective (`None`: never).
+#[derive(Clone, Copy)]
+struct Reach {
+    /// At the end of the first iteration at or below it.
+    first: Option<usize>,
+    /// At the end of the first iteration from which every later one is at or below it.
+    kept: Option<usize>,
+}
+
+impl Reach {
+    const NEVER: Reach = Reach {
+        first: None,
+        kept: None,
+    };
+
+    /// From each iteration's parameter MSE and renders so far, in order.
+    fn of(rows: &[(f64, usize)], paper: f64) -> Reach {
+        let first = rows.iter().find(|(mse, _)| *mse <= paper).map(|r| r.1);
+        let above = rows.iter().rposition(|(mse, _)| *mse > paper);
+        let kept = match above {
+            None => rows.first().map(|r| r.1),
+            Some(k) => rows.get(k + 1).map(|r| r.1),
+        };
+        Reach { first, kept }
+    }
+}
+
+/// When the run in `dir` reached the paper's parameter MSE for `task`, from its
+/// `history.csv`, else derived: for the paper's loop from its summary
+/// ([`run::loop_renders`]), for the adaptive search and the polish from its checkpoint
+/// ([`run::recount`]); why not, if none of these can tell.
 fn renders_to_paper(
     dir: &Path,
     task: &tasks::Task,
     summary: &run::Summary,
-) -> std::result::Result<Option<usize>, String> {
+) -> std::result::Result<Reach, String> {
     let Some(paper) = task.paper().map(|p| p.param_mse) else {
-        return Ok(None);
+        return Ok(Reach::NEVER);
     };
     let history = dir.join("history.csv");
-    let first = |rows: Vec<(f64, usize)>| {
-        rows.iter()
-            .find(|(mse, _)| *mse <= paper)
-            .map(|&(_, renders)| renders)
-    };
+    let reach = |rows: Vec<(f64, usize)>| Reach::of(&rows, paper);
     let (rows, counted) =
         read_history(&history).ok_or_else(|| format!("{} cannot be read", history.display()))?;
     if let Some(renders) = counted {
-        return Ok(first(rows.into_iter().zip(renders).collect()));
+        return Ok(reach(rows.into_iter().zip(renders).collect()));
     }
     let why = |e: String| format!("{}: {e}", dir.display());
     if matches!(
@@ -204,10 +233,12 @@ fn renders_to_paper(
     ) {
         let renders =
             run::loop_renders(rows.len(), summary.evaluations, summary.iterations).map_err(why)?;
-        return Ok(first(rows.into_iter().zip(renders).collect()));
+        return Ok(reach(rows.into_iter().zip(renders).collect()));
     }
     let rows = run::recount(&dir.join(run::checkpoint::FILE)).map_err(|e| why(e.to_string()))?;
-    Ok(run::renders_to(&rows, Some(paper)))
+    Ok(reach(
+        rows.iter().map(|r| (r.param_mse, r.renders)).collect(),
+    ))
 }
 
 /// The parameter MSE of every row of a `history.csv`, and its renders if it has a `renders`
@@ -237,9 +268,12 @@ fn read_history(path: &Path) -> Option<(Vec<f64>, Option<Vec<usize>>)> {
 
 /// How many runs reached the paper's parameter MSE, "k of n", and how many could not be
 /// counted.
-fn reached_cell(counts: &[std::result::Result<Option<usize>, String>]) -> String {
+fn reached_cell(counts: &[std::result::Result<Reach, String>]) -> String {
     let counted = counts.iter().filter(|c| c.is_ok()).count();
-    let reached = counts.iter().filter(|c| matches!(c, Ok(Some(_)))).count();
+    let reached = counts
+        .iter()
+        .filter(|c| matches!(c, Ok(r) if r.first.is_some()))
+        .count();
     let uncounted = counts.len() - counted;
     if counts.is_empty() {
         "-".into()
@@ -250,10 +284,16 @@ fn reached_cell(counts: &[std::result::Result<Option<usize>, String>]) -> String
     }
 }
 
-/// The median and range of the renders to the paper's, a run that never reached it counted as
-/// never (larger than any count).
-fn renders_cell(counts: &[std::result::Result<Option<usize>, String>]) -> String {
-    let mut v: Vec<Option<usize>> = counts.iter().filter_map(|c| c.clone().ok()).collect();
+/// The median and range of the renders to the paper's (`at`: first or kept), a run that never
+/// reached it counted as never (larger than any count).
+fn renders_cell(
+    counts: &[std::result::Result<Reach, String>],
+    at: fn(&Reach) -> Option<usize>,
+) -> String {
+    let mut v: Vec<Option<usize>> = counts
+        .iter()
+        .filter_map(|c| c.as_ref().ok().map(at))
+        .collect();
     if v.is_empty() {
         return "-".into();
     }
@@ -305,5 +345,33 @@ fn bold_if(v: f64, paper: Option<f64>) -> String {
     match paper {
         Some(p) if v <= p => format!("**{}**", report::sci(v)),
         _ => report::sci(v),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Reach;
+
+    #[test]
+    fn a_run_that_swings_through_the_target_reaches_it_early_and_stays_late() {
+        // (parameter MSE, renders so far) per iteration; the paper's MSE is 1.0.
+        let swing = [(4.0, 2), (0.5, 4), (3.0, 6), (0.9, 8), (0.2, 10)];
+        let r = Reach::of(&swing, 1.0);
+        assert_eq!((r.first, r.kept), (Some(4), Some(8)));
+        let steady = [(4.0, 2), (1.0, 4), (0.1, 6)];
+        let r = Reach::of(&steady, 1.0);
+        assert_eq!(
+            (r.first, r.kept),
+            (Some(4), Some(4)),
+            "at the paper's counts"
+        );
+        let r = Reach::of(&[(0.5, 3), (0.4, 5)], 1.0);
+        assert_eq!((r.first, r.kept), (Some(3), Some(3)), "from the first row");
+        let r = Reach::of(&[(0.5, 3), (2.0, 5)], 1.0);
+        assert_eq!((r.first, r.kept), (Some(3), None), "left it at the end");
+        let r = Reach::of(&[(2.0, 3)], 1.0);
+        assert_eq!((r.first, r.kept), (None, None));
+        let r = Reach::of(&[], 1.0);
+        assert_eq!((r.first, r.kept), (None, None));
     }
 }
