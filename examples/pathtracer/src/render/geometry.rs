@@ -544,8 +544,9 @@ pub struct Surface {
     pub light: u32,
 }
 
+/// A shape found by a ray: its kind and index (a mesh's: instance, triangle).
 #[derive(Clone, Copy)]
-enum Prim {
+pub(super) enum Prim {
     Sphere(u32),
     Quad(u32),
     Box(u32),
@@ -585,58 +586,8 @@ impl Geometry {
         d: Vec3A,
         tmax: f32,
     ) -> Option<(f32, Surface)> {
-        let mut best = tmax;
-        let mut prim = None;
-        for (i, s) in self.spheres.iter().enumerate() {
-            let t = s.intersect(o, d, best);
-            if t < best {
-                best = t;
-                prim = Some(Prim::Sphere(i as u32));
-            }
-        }
-        match lanes {
-            Some(lanes) => {
-                for (g, group) in lanes.iter().enumerate() {
-                    // Lane order is quad order: the lowest index wins a tie, as below.
-                    for (k, t) in group.intersect(o, d, best).into_iter().enumerate() {
-                        if t < best {
-                            best = t;
-                            prim = Some(Prim::Quad((4 * g + k) as u32));
-                        }
-                    }
-                }
-            }
-            None => {
-                for (i, q) in self.quads.iter().enumerate() {
-                    let t = q.intersect(o, d, best);
-                    if t < best {
-                        best = t;
-                        prim = Some(Prim::Quad(i as u32));
-                    }
-                }
-            }
-        }
-        for (i, b) in self.boxes.iter().enumerate() {
-            let t = b.intersect(o, d, best);
-            if t < best {
-                best = t;
-                prim = Some(Prim::Box(i as u32));
-            }
-        }
-        if let Some(set) = &self.box_set {
-            if let Some((t, id)) = set.closest(o, d, best) {
-                best = t;
-                prim = Some(Prim::SetBox(id));
-            }
-        }
-        for (k, inst) in self.instances.iter().enumerate() {
-            let lo = inst.inverse * (o - inst.translation);
-            let ld = inst.inverse * d;
-            if let Some((t, tri)) = inst.mesh.intersect(lo, ld, best) {
-                best = t;
-                prim = Some(Prim::Tri(k as u32, tri));
-            }
-        }
+        let (best, prim) = self.nearest_shape(lanes, o, d, tmax);
+        let (best, prim) = self.nearest_rest(o, d, best, prim);
         let prim = prim?;
         let p = o + best * d;
         let mut surface = Surface {
@@ -687,6 +638,103 @@ impl Geometry {
         Some((best, surface))
     }
 
+    /// The closest sphere or quad on the ray before `tmax` (quads four at a time from `lanes`
+    /// when given): the first part of [`Geometry::intersect_in`], with its order and ties.
+    #[inline(always)]
+    pub(super) fn nearest_shape(
+        &self,
+        lanes: Option<&[QuadLanes]>,
+        o: Vec3A,
+        d: Vec3A,
+        tmax: f32,
+    ) -> (f32, Option<Prim>) {
+        let mut best = tmax;
+        let mut prim = None;
+        for (i, s) in self.spheres.iter().enumerate() {
+            let t = s.intersect(o, d, best);
+            if t < best {
+                best = t;
+                prim = Some(Prim::Sphere(i as u32));
+            }
+        }
+        match lanes {
+            Some(lanes) => {
+                for (g, group) in lanes.iter().enumerate() {
+                    // Lane order is quad order: the lowest index wins a tie, as below.
+                    for (k, t) in group.intersect(o, d, best).into_iter().enumerate() {
+                        if t < best {
+                            best = t;
+                            prim = Some(Prim::Quad((4 * g + k) as u32));
+                        }
+                    }
+                }
+            }
+            None => {
+                for (i, q) in self.quads.iter().enumerate() {
+                    let t = q.intersect(o, d, best);
+                    if t < best {
+                        best = t;
+                        prim = Some(Prim::Quad(i as u32));
+                    }
+                }
+            }
+        }
+        (best, prim)
+    }
+
+    /// The rest of [`Geometry::intersect_in`] after [`Geometry::nearest_shape`]: boxes, the box
+    /// set and meshes, each hit replacing (`best`, `prim`) only when strictly closer.
+    #[inline(always)]
+    fn nearest_rest(
+        &self,
+        o: Vec3A,
+        d: Vec3A,
+        mut best: f32,
+        mut prim: Option<Prim>,
+    ) -> (f32, Option<Prim>) {
+        for (i, b) in self.boxes.iter().enumerate() {
+            let t = b.intersect(o, d, best);
+            if t < best {
+                best = t;
+                prim = Some(Prim::Box(i as u32));
+            }
+        }
+        if let Some(set) = &self.box_set {
+            if let Some((t, id)) = set.closest(o, d, best) {
+                best = t;
+                prim = Some(Prim::SetBox(id));
+            }
+        }
+        for (k, inst) in self.instances.iter().enumerate() {
+            let lo = inst.inverse * (o - inst.translation);
+            let ld = inst.inverse * d;
+            if let Some((t, tri)) = inst.mesh.intersect(lo, ld, best) {
+                best = t;
+                prim = Some(Prim::Tri(k as u32, tri));
+            }
+        }
+        (best, prim)
+    }
+
+    /// Whether a box, a box of the set or a mesh lies on the ray before `tmax`: the shapes
+    /// [`Geometry::nearest_rest`] looks at, as shadow-ray queries.
+    #[inline(always)]
+    pub(super) fn rest_occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
+        if self.boxes.iter().any(|b| b.intersect(o, d, tmax) < tmax) {
+            return true;
+        }
+        if let Some(set) = &self.box_set {
+            if set.occluded(o, d, tmax) {
+                return true;
+            }
+        }
+        self.instances.iter().any(|inst| {
+            let lo = inst.inverse * (o - inst.translation);
+            let ld = inst.inverse * d;
+            inst.mesh.occluded(lo, ld, tmax)
+        })
+    }
+
     /// Whether any surface lies on the ray `o + t d` for `t` in (0, `tmax`) (shadow rays).
     #[inline]
     pub fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
@@ -708,22 +756,9 @@ impl Geometry {
                 .any(|g| g.intersect(o, d, tmax).iter().any(|&t| t < tmax)),
             None => self.quads.iter().any(|q| q.intersect(o, d, tmax) < tmax),
         };
-        if quad_hit
+        quad_hit
             || self.spheres.iter().any(|s| s.intersect(o, d, tmax) < tmax)
-            || self.boxes.iter().any(|b| b.intersect(o, d, tmax) < tmax)
-        {
-            return true;
-        }
-        if let Some(set) = &self.box_set {
-            if set.occluded(o, d, tmax) {
-                return true;
-            }
-        }
-        self.instances.iter().any(|inst| {
-            let lo = inst.inverse * (o - inst.translation);
-            let ld = inst.inverse * d;
-            inst.mesh.occluded(lo, ld, tmax)
-        })
+            || self.rest_occluded(o, d, tmax)
     }
 }
 
