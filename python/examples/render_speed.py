@@ -7,7 +7,11 @@ K``, which prints the median of K back-to-back renders, scene set-up excluded), 
 ``--baseline`` names another pathtracer binary (e.g. the build before a change), that one the
 same way, then Mitsuba (K renders, their median); the order of the renderers turns by one each
 repetition so that neither always runs first. The table gives the medians over repetitions and
-the ratios.
+the ratios. Each renderer's turn starts after a pause (``SETTLE``): a pathtracer process started
+right after a Mitsuba render (2 of every 3 repetitions for the first renderer, 1 of 3 for the
+second) ran TEXTURE's 2.4 ms render in 4.6 ms, so the first column's medians were those of the
+slowed runs and the second's were not (drjit's worker threads staying busy for a while after a
+render are the likely cause).
 
 Mitsuba in steady state: its first render of a task compiles the JIT kernels and is left out of
 the timed renders (and reported on its own, as "first render"); drjit keeps compiled kernels in
@@ -49,6 +53,9 @@ import mitsuba_export as mx  # noqa: E402
 
 TASKS = ("cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture")
 GOAL = 0.5  # issue 25 item 4: at most half Mitsuba's time per render
+# Seconds to wait before each renderer's turn, so that none starts while the one before still
+# keeps the cores busy (see the docstring).
+SETTLE = 0.2
 
 
 def ours_seconds(binary: str, task: str, threads: int, inner: int, workdir: Path) -> float:
@@ -142,6 +149,7 @@ def measure(args: argparse.Namespace, workdir: Path) -> list[dict[str, Any]]:
         for rep in range(args.repeat):
             k = rep % len(renderers)
             for name, run in renderers[k:] + renderers[:k]:
+                time.sleep(SETTLE)
                 times[name].append(run())
         row = {name: statistics.median(v) for name, v in times.items()}
         row.update(task=task, width=m.desc["film"]["width"], height=m.desc["film"]["height"],
@@ -194,7 +202,8 @@ def page(args: argparse.Namespace, rows: list[dict[str, Any]], load: tuple[float
         f"Mitsuba {args.mitsuba_version} (`llvm_ad_rgb`, `path` integrator). Both renderers on "
         f"{args.threads} threads ({os.cpu_count()} cores, {cpu}). Each cell is the median over "
         f"{args.repeat} interleaved repetitions, each the median of {args.inner} back-to-back "
-        "renders; the order of the renderers turns every repetition. Ours: "
+        "renders; the order of the renderers turns every repetition, and each turn starts "
+        f"after a {SETTLE} s pause (a render started right after Mitsuba's ran slower). Ours: "
         "`pathtracer render TASK --target --repeat K --threads T` (render alone, scene set-up "
         "excluded)"
         + (f"; before: the same command with `{args.baseline_label}`" if base else "")

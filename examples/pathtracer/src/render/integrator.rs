@@ -8,6 +8,7 @@ use rayon::prelude::*;
 use super::film::Image;
 use super::geometry::Surface;
 use super::lanes::QuadLanes;
+use super::last_segment::LastHit;
 use super::material::{sample_cosine, scatter_dielectric, Material};
 use super::rng::Sampler;
 use super::Scene;
@@ -214,37 +215,28 @@ impl<'a> Tracer<'a> {
     #[inline(always)]
     fn segment(&self, path: &mut Path) {
         let (scene, s) = (self.scene, self.settings);
-        let (geo, lights) = (&scene.geometry, &scene.lights);
-        let Some((_, hit)) = geo.intersect_in(self.lanes, path.o, path.d, f32::INFINITY) else {
-            if self.has_env {
-                let w = if path.specular || !self.env_nee {
-                    1.0
-                } else {
-                    // Both strategies are cosine-distributed about the same normal.
-                    power_heuristic(path.prev_pdf, path.prev_pdf)
-                };
-                path.radiance += path.beta * lights.environment * w;
+        let geo = &scene.geometry;
+        if path.segments >= s.max_depth {
+            // Only an emitter or a miss can still add light: no closest hit needed.
+            match geo.last_hit(self.lanes, path.o, path.d) {
+                LastHit::Miss => self.add_environment(path),
+                LastHit::Emitter { t, quad } => {
+                    let q = &geo.quads[quad as usize];
+                    self.add_emission(path, path.o + t * path.d, q.emission, q.light);
+                }
+                LastHit::Dark => {}
             }
+            path.done = true;
+            return;
+        }
+        let Some((_, hit)) = geo.intersect_in(self.lanes, path.o, path.d, f32::INFINITY) else {
+            self.add_environment(path);
             path.done = true;
             return;
         };
 
         if hit.emission != Vec3A::ZERO {
-            let w = if path.specular || !s.nee {
-                1.0
-            } else {
-                let k = hit.light as usize;
-                let light_pdf = lights.areas.get(k).map_or(0.0, |&q| {
-                    lights.area_pdf(&geo.quads[q as usize], path.prev_p, hit.p, path.d)
-                });
-                power_heuristic(path.prev_pdf, light_pdf)
-            };
-            path.radiance += path.beta * hit.emission * w;
-        }
-
-        if path.segments >= s.max_depth {
-            path.done = true;
-            return;
+            self.add_emission(path, hit.p, hit.emission, hit.light);
         }
 
         let scattered = match scene.materials[hit.material as usize] {
@@ -279,6 +271,37 @@ impl<'a> Tracer<'a> {
             }
             path.beta /= q;
         }
+    }
+
+    /// The environment seen by `path`'s ray (it left the scene), MIS-weighted when the
+    /// environment is also sampled by NEE.
+    #[inline(always)]
+    fn add_environment(&self, path: &mut Path) {
+        if self.has_env {
+            let w = if path.specular || !self.env_nee {
+                1.0
+            } else {
+                // Both strategies are cosine-distributed about the same normal.
+                power_heuristic(path.prev_pdf, path.prev_pdf)
+            };
+            path.radiance += path.beta * self.scene.lights.environment * w;
+        }
+    }
+
+    /// `emission` of area light `light` found by `path`'s ray at `p`, MIS-weighted against
+    /// light sampling unless the last scattering was a delta (or NEE is off).
+    #[inline(always)]
+    fn add_emission(&self, path: &mut Path, p: Vec3A, emission: Vec3A, light: u32) {
+        let (geo, lights) = (&self.scene.geometry, &self.scene.lights);
+        let w = if path.specular || !self.settings.nee {
+            1.0
+        } else {
+            let light_pdf = lights.areas.get(light as usize).map_or(0.0, |&q| {
+                lights.area_pdf(&geo.quads[q as usize], path.prev_p, p, path.d)
+            });
+            power_heuristic(path.prev_pdf, light_pdf)
+        };
+        path.radiance += path.beta * emission * w;
     }
 
     /// Next-event estimation at a diffuse hit and the cosine-sampled continuation; false

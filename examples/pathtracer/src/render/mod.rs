@@ -8,6 +8,7 @@ pub mod film;
 pub mod geometry;
 pub mod integrator;
 mod lanes;
+mod last_segment;
 pub mod light;
 pub mod material;
 mod packed;
