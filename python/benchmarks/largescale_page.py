@@ -293,6 +293,7 @@ SEED_LABELS = {
     "nocov": "warm-up; the two points out of the covariance update",
     "rates": "warm-up; the two points out of the covariance update; sep-CMA-ES's rates",
     "wrates": "warm-up; sep-CMA-ES's rates",
+    "fast": "the default with the warm-up twice as fast (TPA's damping halved while it lasts)",
     "rates-start": "the default with the two points out of the covariance update and sep-CMA-ES's rates",
     "tpa-rates": "TPA and sep-CMA-ES's rates",
     "nopair": "the warm-up without the two points after it",
@@ -392,6 +393,7 @@ def main() -> None:
         "two-point step-size adaptation (TPA)": read(glob.glob(os.path.join(out, "tried-tpa-texture*.csv"))),
         "TPA only where CSA agrees": read(glob.glob(os.path.join(out, "tried-tpaguard-texture*.csv"))),
         "the warm-up without the two points after it": read(glob.glob(os.path.join(out, "tried-nopair-texture*.csv"))),
+        "the warm-up twice as fast": read(glob.glob(os.path.join(out, "tried-fast-texture*.csv"))),
     }
     tried = {k: v for k, v in tried.items() if v}
     tried_bbob = {
