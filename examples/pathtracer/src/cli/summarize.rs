@@ -74,14 +74,8 @@ pub(super) fn write_results(out: &Path, command: &str) -> Result<()> {
 
 /// The method of a run, as the tables name it.
 pub(super) fn method_label(s: &run::Summary) -> String {
-    match s.method {
-        run::Method::Plateau => format!("paper loop, {:?}", s.sampling).to_lowercase(),
-        run::Method::Adaptive => "adaptive search".into(),
-        run::Method::Polished => run::polished_label(s.polish),
-        run::Method::Fd => "finite difference".into(),
-        run::Method::Spsa => "SPSA".into(),
-        run::Method::Image => "image (Gauss-Newton)".into(),
-    }
+    let paper_loop = || format!("paper loop, {:?}", s.sampling).to_lowercase();
+    s.method.label(paper_loop, s.polish)
 }
 
 /// One row of `results.md`: the settings, our errors over seeds, the paper's and the baseline's.

@@ -33,8 +33,7 @@ pub use checkpoint::{Build, Checkpoint, CheckpointError, Every, Progress};
 pub use outcome::{renders_to, write_history, Outcome, Row, Summary};
 pub use recount::{loop_renders, recount};
 pub use settings::{
-    eval_every, polished_label, Crn, Method, Settings, CURVE_POINTS, MAX_SAMPLES, MAX_SCALE,
-    POLISH, POLISH_BEFORE,
+    eval_every, Crn, Method, Settings, CURVE_POINTS, MAX_SAMPLES, MAX_SCALE, POLISH, POLISH_BEFORE,
 };
 pub use stall_replay::{replay as replay_stall, Replayed};
 

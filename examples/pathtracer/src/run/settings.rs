@@ -191,36 +191,40 @@ impl Method {
     }
 }
 
-/// How tables name a polished run with the polish's share `polish` (`None`: a run written
-/// before the share was a setting, which ran with [`POLISH_BEFORE`]): the share only where it
-/// is not the default.
-pub fn polished_label(polish: Option<f64>) -> String {
-    match polish.unwrap_or(POLISH_BEFORE) {
-        share if share != POLISH => format!("paper loop, polished (polish {share})"),
-        _ => "paper loop, polished".into(),
+impl Method {
+    /// A short label for tables and legends: `paper_loop` names a paper-loop run (its
+    /// sampler and switches, worded by the caller), `polish` a polished run's share (`None`: a
+    /// run written before the share was a setting, which ran with [`POLISH_BEFORE`]; the share
+    /// is named only where it is not the default).
+    pub fn label(self, paper_loop: impl FnOnce() -> String, polish: Option<f64>) -> String {
+        match self {
+            Method::Plateau => paper_loop(),
+            Method::Fd => "finite difference".into(),
+            Method::Spsa => "SPSA".into(),
+            Method::Adaptive => "adaptive search".into(),
+            Method::Polished => match polish.unwrap_or(POLISH_BEFORE) {
+                share if share != POLISH => format!("paper loop, polished (polish {share})"),
+                _ => "paper loop, polished".into(),
+            },
+            Method::Image => "image (Gauss-Newton)".into(),
+        }
     }
 }
 
 impl Settings {
     /// A short label for tables and legends.
     pub fn label(&self) -> String {
-        match self.method {
-            Method::Fd => "finite difference".into(),
-            Method::Spsa => "SPSA".into(),
-            Method::Adaptive => "adaptive search".into(),
-            Method::Polished => polished_label(Some(self.polish)),
-            Method::Image => "image (Gauss-Newton)".into(),
-            Method::Plateau => {
-                let mut s = format!("{:?}", self.sampling).to_lowercase();
-                if !self.antithetic {
-                    s.push_str(", no antithetic");
-                }
-                if !self.anneal {
-                    s.push_str(", no annealing");
-                }
-                s
+        let paper_loop = || {
+            let mut s = format!("{:?}", self.sampling).to_lowercase();
+            if !self.antithetic {
+                s.push_str(", no antithetic");
             }
-        }
+            if !self.anneal {
+                s.push_str(", no annealing");
+            }
+            s
+        };
+        self.method.label(paper_loop, Some(self.polish))
     }
 }
 
@@ -240,11 +244,10 @@ mod tests {
         let read: Settings = serde_json::from_value(json).unwrap();
         assert_eq!(read.polish, POLISH_BEFORE);
         assert_eq!(Settings::defaults(&task).polish, POLISH);
-        assert_eq!(polished_label(None), "paper loop, polished (polish 0.25)");
-        assert_eq!(polished_label(Some(POLISH)), "paper loop, polished");
-        assert_eq!(
-            polished_label(Some(0.25)),
-            "paper loop, polished (polish 0.25)"
-        );
+        let polished = |share| Method::Polished.label(String::new, share);
+        assert_eq!(polished(None), "paper loop, polished (polish 0.25)");
+        assert_eq!(polished(Some(POLISH)), "paper loop, polished");
+        assert_eq!(polished(Some(0.25)), "paper loop, polished (polish 0.25)");
+        assert_eq!(Method::Plateau.label(|| "radial".into(), None), "radial");
     }
 }
