@@ -224,11 +224,10 @@ impl Adaptive {
         let ended = dist.update(ys, values).is_some();
         // A warm-up (diagonal metric: gaussian.rs's `Tpa`) that drew nothing better than the
         // best value seen before the run found the spread and nothing else: while sigma was
-        // far too wide the mean drifted to points worse than the start (on a bowl of the
-        // texture task's form at n = 12,288 the generations' best went from the start's 0.19
-        // to 0.66, was 0.39 when the warm-up ended, and never came back below the start within
-        // 10^4 evaluations: docs/results/large-scale.md). The run goes on from its start point
-        // with the spread the warm-up found.
+        // far too wide the mean drifted to points worse than the start (on the texture task at
+        // n = 12,288 the run had not come back below the start within 10^4 evaluations:
+        // docs/results/large-scale.md). The run goes on from its start point with the spread
+        // the warm-up found.
         if dist.warm_up_ended() && self.run_reference.is_some_and(|r| ledger.best.fun >= r) {
             dist.recentre(&self.start);
         }
