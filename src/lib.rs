@@ -149,8 +149,8 @@ pub use minimize::{minimize, Minimizer};
 pub use objective::{Batch, NoObjective, Objective, Points, Seeded};
 pub use optimize::Step;
 pub use run::{
-    Ask, History, HistoryKeep, Metric, Minimum, OptimizerState, RunError, Stall, Stop, Strategy,
-    FULL_METRIC_LIMIT, FULL_METRIC_MAX_DIM, STALL_WINDOW,
+    Ask, FailurePolicy, History, HistoryKeep, Metric, Minimum, OptimizerState, RunError, Stall,
+    Stop, Strategy, FULL_METRIC_LIMIT, FULL_METRIC_MAX_DIM, STALL_WINDOW,
 };
 pub use sampling::Sampling;
 pub use vector::{

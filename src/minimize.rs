@@ -9,7 +9,7 @@ use std::fmt;
 use crate::error::Error;
 use crate::method::AskTell;
 use crate::objective::{NoObjective, Objective};
-use crate::run::{Metric, Minimum, Options, Strategy};
+use crate::run::{FailurePolicy, Metric, Minimum, Options, Strategy};
 // For the documentation's links only.
 #[cfg(doc)]
 use crate::run::Stop;
@@ -227,6 +227,10 @@ impl<F> Minimizer<F> {
         /// # Ok::<(), plateau_free::Error>(())
         /// ```
         stop_when_stalled(window: f64) => options.stall = Some(window);
+
+        /// What the run does with an evaluation that returned NaN or an infinity (see
+        /// [`FailurePolicy`]).
+        on_failure(policy: FailurePolicy) => options.on_failure = policy;
     }
 
     /// The objective.

@@ -25,6 +25,20 @@ pub enum Stop {
     /// The best value stopped improving ([`Minimizer::stop_when_stalled`], the rule
     /// [`crate::Stall`]).
     Stalled,
+    /// The run is done before its budget: its restarts converged and keep finding the best
+    /// point seen again, so more evaluations would buy nothing.
+    Done,
+    /// The run was interrupted (Ctrl-C, or a stop asked by the caller): the result holds the best point
+    /// seen so far.
+    Interrupted,
+}
+
+impl Stop {
+    /// Whether the run ended at a point it judged an answer: a target reached, or converged
+    /// ([`Stop::Converged`], [`Stop::Done`]). A spent budget, a stall or an interrupt is not.
+    pub fn success(self) -> bool {
+        matches!(self, Stop::Target | Stop::Converged | Stop::Done)
+    }
 }
 
 impl fmt::Display for Stop {
@@ -34,6 +48,8 @@ impl fmt::Display for Stop {
             Stop::Target => "target reached",
             Stop::Converged => "converged",
             Stop::Stalled => "stalled",
+            Stop::Done => "done: the restarts found the best point again",
+            Stop::Interrupted => "interrupted",
         })
     }
 }
@@ -57,6 +73,17 @@ pub struct Minimum {
     pub sigma: f64,
     /// Why the run ended.
     pub stop: Stop,
+    /// Evaluations whose value was NaN or infinite (or, in the bindings, raised): ranked below
+    /// every finite value under [`crate::FailurePolicy::Continue`], never the best point.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub failures: usize,
+}
+
+impl Minimum {
+    /// Whether the run ended at a point it judged an answer ([`Stop::success`]).
+    pub fn success(&self) -> bool {
+        self.stop.success()
+    }
 }
 
 /// The best point seen and its value.
@@ -142,6 +169,7 @@ impl Ledger {
             restarts,
             sigma,
             stop,
+            failures: 0,
         }
     }
 }

@@ -51,6 +51,19 @@ pub enum Metric {
     Diagonal,
 }
 
+/// What a run does with an evaluation that failed: a NaN or infinite value (or, in the
+/// bindings, an exception raised by `f`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum FailurePolicy {
+    /// The run goes on: a failed point ranks below every finite value, is counted in
+    /// [`crate::Minimum::failures`] and is never the best point.
+    Continue,
+    /// The run ends with [`Error::NonFiniteValue`] naming the point.
+    #[default]
+    Raise,
+}
+
 /// The largest dimension for which [`Metric::Auto`] learns a full covariance.
 pub const FULL_METRIC_MAX_DIM: usize = 200;
 
@@ -84,6 +97,9 @@ pub(crate) struct Options {
     /// the budget alone ends the run).
     #[cfg_attr(feature = "serde", serde(default, with = "crate::saved::float_option"))]
     pub(crate) stall: Option<f64>,
+    /// [`crate::Minimizer::on_failure`].
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub(crate) on_failure: FailurePolicy,
 }
 
 impl Default for Options {
@@ -103,6 +119,7 @@ impl Default for Options {
             strategy: Strategy::Adaptive,
             polish: 0.0,
             stall: None,
+            on_failure: FailurePolicy::default(),
         }
     }
 }
