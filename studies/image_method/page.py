@@ -1,6 +1,6 @@
 """Writes docs/results/image-method.md from the runs of scripts/image-method.
 
-Usage: python3 scripts/image-method-page.py RUNS PAGE COMMAND
+Usage: python3 -m studies image-method-page RUNS PAGE COMMAND
 Every number on the page is read from the runs' summary.json and history.csv.
 """
 
@@ -8,6 +8,8 @@ import csv
 import json
 import sys
 from pathlib import Path
+
+from studies import _page
 
 THRESHOLD = 1e-3
 
@@ -50,7 +52,7 @@ def main() -> None:
                 secs=s["seconds_total"],
             )
         )
-    head = Path(__file__).with_name("image-method-page.md").read_text()
+    head = Path(__file__).with_name("page.md").read_text()
     table = "\n".join(
         [
             "| task | method | seed | N | renders | param MSE start | param MSE end | image MSE end | renders to param MSE <= 1e-3 | seconds |",
@@ -58,7 +60,7 @@ def main() -> None:
             *rows,
         ]
     )
-    page.write_text(head.replace("{command}", command).replace("{table}", table))
+    _page.write(page, head.replace("{command}", command).replace("{table}", table), runs=runs)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """Writes ``docs/results/large-scale.md`` (and its plot) from the csv files of
-``python/benchmarks/largescale.py`` in a run directory.
+``studies/large_scale/run.py`` in a run directory.
 
-    python largescale_page.py OUT PAGE COMMAND
+    python page.py OUT PAGE COMMAND
 
 ``OUT`` holds ``texture-*.csv`` and ``bbob.csv``; ``PAGE`` is the page to write (the plot goes
 beside it, same name with ``.png``); ``COMMAND`` is the command the page names.
@@ -17,6 +17,8 @@ import sys
 from collections import defaultdict
 from statistics import median
 from typing import Iterable
+
+from studies import _page
 
 SIZES = [768, 3072, 12288, 49152]
 BUDGETS = [10_000, 100_000, 1_000_000]
@@ -262,7 +264,7 @@ def bbob_before_after(before: list[Row], after: dict[str, list[Row]]) -> list[st
 
 def seeds_table(rows: list[Row]) -> list[str]:
     """``minimize`` with each step-size rule over seeds on one bbob-largescale problem
-    (``largescale_seeds.py``): best - f_opt at 30,000 evaluations and at the end (targets
+    (``seeds.py``): best - f_opt at 30,000 evaluations and at the end (targets
     reached at the end), one cell per seed."""
     by_seed: dict[tuple[str, str, str, str], dict[str, tuple[str, str]]] = defaultdict(dict)
     for r in rows:
@@ -384,7 +386,7 @@ def main() -> None:
     png = os.path.splitext(page)[0] + ".png"
     plot(rows, png)
     table, missing = texture_table(rows)
-    template = open(os.path.join(os.path.dirname(__file__), "largescale_page.md")).read()
+    template = open(os.path.join(os.path.dirname(__file__), "page.md")).read()
     tried = {
         "TPA warm-up, then CSA (the default before)": read(glob.glob(os.path.join(out, "tried-warm-texture*.csv"))),
         "CSA alone (the default before the warm-up)": read(glob.glob(os.path.join(out, "tried-csa-texture*.csv"))),
@@ -421,8 +423,7 @@ def main() -> None:
         bbob="\n".join(bbob_tables(bbob)),
         missing="\n".join(f"- {m}" for m in missing + bbob_missing(bbob)) or "- nothing: every run of the grid ran",
     )
-    with open(page, "w") as f:
-        f.write(text)
+    _page.write(page, text, runs=out)
 
 
 if __name__ == "__main__":

@@ -4,11 +4,11 @@ step-size rules tried, issue 28 item 1): one row per run and evaluation count (1
 targets it reaches, appended to ``OUT``. The page's ``tried-seeds-bbob.csv`` is this script's
 output with the wheels named there; the label names the build, nothing else differs.
 
-    python largescale_seeds.py OUT LABEL N FUNCTIONS SEEDS INSTANCES
-    python largescale_seeds.py seeds.csv csa 320 15 0,1,2 1
+    python seeds.py OUT LABEL N FUNCTIONS SEEDS INSTANCES
+    python seeds.py seeds.csv csa 320 15 0,1,2 1
 
 ``ask_tell(x0, budget=1000 n, seed=seed, target=f_opt + 1e-8)`` from the suite's ``x0``, as
-``largescale.py bbob`` runs it (which fixes the seed at 0), with no wall-time cap.
+``run.py bbob`` runs it (which fixes the seed at 0), with no wall-time cap.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-import largescale as ls
+from studies.large_scale import run as ls
 
 
 def run(w: "csv._writer", label: str, problem: object, fopt: float, key: list[object], seed: int) -> float:

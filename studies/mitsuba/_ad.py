@@ -1,4 +1,4 @@
-"""Mitsuba's own gradient on SHADOW (part of mitsuba_optimize.py): a differentiable integrator,
+"""Mitsuba's own gradient on SHADOW (part of optimize.py): a differentiable integrator,
 Dr.Jit's backward pass and Mitsuba's Adam from the same start as plateau-free's runs."""
 
 from __future__ import annotations
@@ -7,8 +7,8 @@ import sys
 import time
 from pathlib import Path
 
-import mitsuba_scene as ms  # imports no mitsuba itself
-from mitsuba_files import write_csv, write_png
+from studies.mitsuba import _scene as ms  # imports no mitsuba itself
+from studies.mitsuba._files import write_csv, write_png
 
 
 def run_ad(mi, args, seed: int, out: Path) -> dict:

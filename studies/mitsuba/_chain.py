@@ -1,6 +1,6 @@
 """Mitsuba's own gradient of a task's image loss with respect to the task's parameters theta.
 
-The scene is the exporter's (``pathtracer export``, mitsuba_export.py), and so is the map
+The scene is the exporter's (``pathtracer export``, _export.py), and so is the map
 theta -> scene: ``ChainTwin`` flattens every number of an exported description (sphere
 centres and radii, quad corners and edges, box and mesh ``to_world`` rows, albedos, emissions,
 point lights) into a vector e(theta), and takes its Jacobian J = de/dtheta from the exporter
@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
-import mitsuba_export as mx
-import mitsuba_twin as mt
+from studies.mitsuba import _export as mx
+from studies.mitsuba import _twin as mt
 
 STEP = 1e-2  # the exporter's central-difference step in theta (see jacobian_error)
 
@@ -327,8 +327,8 @@ def compare_guiding(mi, task: str = "gi", theta=(0.2, 0.8, 0.2, 0.5, 0.8, 0.7), 
 
 
 if __name__ == "__main__":
-    # python python/examples/mitsuba_chain.py: the guiding comparison quoted in docs/mitsuba.md
-    from mitsuba_scene import load_mitsuba
+    # python studies/mitsuba/_chain.py: the guiding comparison quoted in docs/mitsuba.md
+    from studies.mitsuba._scene import load_mitsuba
 
     m = load_mitsuba()
     m.set_log_level(m.LogLevel.Error)

@@ -1,4 +1,4 @@
-"""Files of the Mitsuba SHADOW example (mitsuba_optimize.py): the paper's figures it compares
+"""Files of the Mitsuba SHADOW example (optimize.py): the paper's figures it compares
 with, where the repository is, and the writers of its images, tables and plots."""
 
 from __future__ import annotations

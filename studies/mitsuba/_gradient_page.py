@@ -1,4 +1,4 @@
-"""The page of mitsuba_gradient.py: ``OUT.md`` from ``OUT/runs.csv`` and the runs' histories.
+"""The page of gradient.py: ``OUT.md`` from ``OUT/runs.csv`` and the runs' histories.
 
 Every number on the page is read from the run files; the verdict per task follows from them
 by the rules stated on the page (``verdict``).
@@ -11,6 +11,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from studies import _page
 
 # Main paper Table 2 (SPEC.md; the same numbers as PAPER in examples/pathtracer/src/tasks/mod.rs):
 # (plateau-free image MSE, parameter MSE, Mitsuba 3 image MSE, parameter MSE). TEXTURE is the
@@ -93,11 +95,11 @@ def write(out: Path, command: str) -> None:
     lines = [
         "# Mitsuba's own gradient on every task",
         "",
-        f"Written by `target/venv/bin/python python/examples/{command}` (docs/mitsuba.md, "
+        f"Written by `target/venv/bin/python {command}` (docs/mitsuba.md, "
         "\"Mitsuba's own gradient\"). Each task's scene is its export (`pathtracer export`); "
         "Mitsuba 3 (`llvm_ad_rgb`) differentiates the image MSE against the target rendered with "
         "the run's seed, and the chain rule through the exporter's map gives dL/dtheta "
-        "(python/examples/mitsuba_chain.py; tested against finite differences of Mitsuba's loss by "
+        "(studies/mitsuba/_chain.py; tested against finite differences of Mitsuba's loss by "
         "python/tests/test_mitsuba_gradient.py). Adam (0.9, 0.999, 1e-8) at the task's learning "
         "rate (supplemental Table 1) in the task's parameters, from the task's start, clamped to "
         "the task's box after each step as our runs do; every render (reference included) uses the "
@@ -137,14 +139,14 @@ def write(out: Path, command: str) -> None:
             f"{float(r['seconds_per_iteration']):.2f} | {st['zero']} of {st['n']} | "
             f"{'-' if tw is None else f'{100 * tw:.0f} %'} |")
     lines += _summary(per_task) + _images(out, per_task) + _missing(per_task, command)
-    (out.parent / (out.name + ".md")).write_text("\n".join(lines) + "\n")
+    _page.write(out.parent / (out.name + ".md"), lines, runs=out)
 
 
 def _target(task: str, run_dir: Path) -> list[float]:
     """The task's target, from the exporter (``run_dir`` is not needed: it is the task's)."""
     import tempfile
 
-    import mitsuba_export as mx
+    from studies.mitsuba import _export as mx
 
     with tempfile.TemporaryDirectory() as tmp:
         return [float(v) for v in mx.run_export(task, tmp, "target")["theta"]]
@@ -208,4 +210,4 @@ def _missing(per_task: dict[str, tuple[list, list, list]], command: str) -> list
     if not missing:
         return lines
     return lines + ["", f"Not run (out of time on the shared machine): {', '.join(missing)}. The same command "
-            f"runs only what is missing: `target/venv/bin/python python/examples/{command}`."]
+            f"runs only what is missing: `target/venv/bin/python {command}`."]

@@ -1,4 +1,4 @@
-"""The results pages of the Mitsuba SHADOW example (mitsuba_optimize.py --seeds K): the paper
+"""The results pages of the Mitsuba SHADOW example (optimize.py --seeds K): the paper
 loop's runs next to our renderer's and Mitsuba's AD (OUT.md, docs/results/mitsuba.md), and
 the adaptive search's next to the paper loop's."""
 
@@ -10,8 +10,9 @@ import os
 import sys
 from pathlib import Path
 
-import mitsuba_scene as ms  # imports no mitsuba itself
-from mitsuba_files import HERE, PAPER_PARAM_MSE, REPO, fmt, plot_convergence, read_csv
+from studies.mitsuba import _scene as ms  # imports no mitsuba itself
+from studies.mitsuba._files import HERE, PAPER_PARAM_MSE, REPO, fmt, plot_convergence, read_csv
+from studies import _page
 
 
 SHADOW_DEFAULTS = {"task": "shadow", "method": "plateau", "sampling": "radial", "antithetic": "true",
@@ -89,7 +90,7 @@ def write_page(args, out: Path, seeds: list[int]) -> Path:
     ad_dir = out / "ad"
     ad = json.loads((ad_dir / "summary.json").read_text()) if (ad_dir / "summary.json").exists() else None
 
-    cmd = f"python python/examples/mitsuba_optimize.py --method plateau --seeds {len(seeds)} --out {os.path.relpath(out, REPO)}"
+    cmd = f"python -m studies mitsuba-optimize --method plateau --seeds {len(seeds)} --out {os.path.relpath(out, REPO)}"
     L = ["# SHADOW on two backbones: our path tracer and Mitsuba 3", "",
          f"Written by `{cmd}` (after `scripts/install-mitsuba`; `--page-only` rewrites this page from the runs). "
          "Mitsuba runs: " + f"`{os.path.relpath(out, REPO)}/seed-<k>/`" + "; our renderer's runs are read from "
@@ -179,10 +180,10 @@ def write_page(args, out: Path, seeds: list[int]) -> Path:
     if t.exists():
         L.append(f"| ours | ![]({rel(t / 'target.png')}) | ![]({rel(t / 'initial.png')}) | ![]({rel(t / 'final.png')}) | - |")
     L += [""]
-    notes = Path(args.notes) if args.notes else HERE / "mitsuba_notes.md"
+    notes = Path(args.notes) if args.notes else HERE / "NOTES.md"
     if notes.exists():
         L += [notes.read_text().rstrip(), ""]
-    page.write_text("\n".join(L))
+    _page.write(page, L, runs=out)
     print(f"wrote {page}", file=sys.stderr)
     return page
 
@@ -241,7 +242,7 @@ def write_page_adaptive(args, out: Path, seeds: list[int]) -> Path:
         if f.exists():
             paper[s] = json.loads(f.read_text())
     outrel = os.path.relpath(out.resolve(), REPO)
-    cmd = (f"python python/examples/mitsuba_optimize.py --method {name} --seeds {len(seeds)}"
+    cmd = (f"python -m studies mitsuba-optimize --method {name} --seeds {len(seeds)}"
            + (f" --run-seeds {args.run_seeds}" if args.run_seeds else "")
            + (f" --stop-at {args.stop_at}" if args.stop_at else "")
            + f" --out {outrel}")
@@ -328,6 +329,6 @@ def write_page_adaptive(args, out: Path, seeds: list[int]) -> Path:
         L.append(f"| {s} | ![]({rel(d / 'target.png')}) | ![]({rel(d / 'initial.png')}) | ![]({rel(d / 'final.png')}) | "
                  + (f"![]({rel(q)})" if q.exists() else "-") + " |")
     L += [""]
-    page.write_text("\n".join(L))
+    _page.write(page, L, runs=out)
     print(f"wrote {page}", file=sys.stderr)
     return page

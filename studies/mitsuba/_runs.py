@@ -1,4 +1,4 @@
-"""One seed of the Mitsuba SHADOW example (mitsuba_optimize.py): plateau-free's paper loop, its
+"""One seed of the Mitsuba SHADOW example (optimize.py): plateau-free's paper loop, its
 adaptive search, or the loop polished by the adaptive search, on Mitsuba renders, the run's files (images, history.csv, summary.json,
 convergence.png) and its settings."""
 
@@ -18,9 +18,9 @@ except ImportError:
     sys.exit("the Python package plateau-free is not installed: `pip install plateau-free` "
              "(or, from a clone of the repository, `pip install ./python`)")
 
-import mitsuba_scene as ms  # imports no mitsuba itself
-from mitsuba_ad import run_ad
-from mitsuba_files import (
+from studies.mitsuba import _scene as ms  # imports no mitsuba itself
+from studies.mitsuba._ad import run_ad
+from studies.mitsuba._files import (
     PAPER_MITSUBA_PARAM_MSE,
     PAPER_PARAM_MSE,
     plot_convergence,

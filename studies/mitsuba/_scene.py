@@ -1,6 +1,6 @@
 """The SHADOW task of docs/tasks.md as a Mitsuba 3 scene (CPU variant ``llvm_ad_rgb``).
 
-The scene comes from ``pathtracer export shadow`` (mitsuba_export.py turns the description
+The scene comes from ``pathtracer export shadow`` (_export.py turns the description
 into Mitsuba's), so examples/pathtracer/src/tasks/shadow.rs is its only definition; the
 binary is target/release/pathtracer (``cargo build --release -p pathtracer``) or
 ``$PATHTRACER``. It is the scene of SPEC section 2:
@@ -77,7 +77,7 @@ def export_shadow(which_or_theta, scale: float = 1.0, spp: int = 32) -> dict:
     import subprocess
     import tempfile
 
-    import mitsuba_export as mx
+    from studies.mitsuba import _export as mx
 
     with tempfile.TemporaryDirectory() as tmp:
         if isinstance(which_or_theta, str):
@@ -104,13 +104,13 @@ def _check_constants(desc: dict, scale: float) -> None:
     if [round(t, 9) for t in desc.get("theta", [])] != list(START):
         problems.append(f"start {desc.get('theta')} != {START}")
     if problems:
-        raise RuntimeError("mitsuba_scene.py and `pathtracer export shadow` disagree: " + "; ".join(problems))
+        raise RuntimeError("_scene.py and `pathtracer export shadow` disagree: " + "; ".join(problems))
 
 
 def scene_dict(mi, theta=START, spp: int = 32, scale: float = 1.0, integrator: dict | None = None):
-    """The scene as Mitsuba reads it, from ``pathtracer export shadow`` (mitsuba_export.py)
+    """The scene as Mitsuba reads it, from ``pathtracer export shadow`` (_export.py)
     at ``theta``; ``scale`` multiplies the resolution (the test's short run)."""
-    import mitsuba_export as mx
+    from studies.mitsuba import _export as mx
 
     at_start = tuple(float(t) for t in theta) == START
     desc = export_shadow("start" if at_start else theta, scale, spp)

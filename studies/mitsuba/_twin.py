@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-import mitsuba_export as mx
+from studies.mitsuba import _export as mx
 
 
 def _affine(rows) -> np.ndarray:

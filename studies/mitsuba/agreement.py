@@ -1,7 +1,7 @@
 """Does our renderer draw what Mitsuba 3 draws? Every task, from one scene description.
 
 For each task and each of its start and target parameters: ``pathtracer export`` writes the
-scene (mitsuba_export.py loads it into Mitsuba), ``pathtracer render`` renders it with our
+scene (_export.py loads it into Mitsuba), ``pathtracer render`` renders it with our
 renderer (seed 0) and Mitsuba (``llvm_ad_rgb``, ``path`` integrator, the same spp and
 max_depth) renders it with seeds 0 and 1. The images are compared in 4x4-pixel block means
 of linear radiance:
@@ -13,7 +13,7 @@ Mitsuba seed 0)`` is the agreement; ``error(Mitsuba seed 1, Mitsuba seed 0)`` is
 floor, what two renders of the same scene by the same renderer differ by. The issue's goal:
 the agreement within 2 %.
 
-    target/venv/bin/python python/examples/mitsuba_agreement.py --out docs/results/mitsuba-agreement
+    target/venv/bin/python -m studies mitsuba-agreement --out docs/results/mitsuba-agreement
 
 writes ``OUT/<task>-<start|target>.png`` (ours, Mitsuba, their block difference),
 ``OUT/agreement.json`` and the page ``OUT.md``. Needs mitsuba (``scripts/install-mitsuba``)
@@ -36,10 +36,9 @@ from typing import Any
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
+from studies import _page
+from studies.mitsuba import _export as mx
 
-import mitsuba_export as mx  # noqa: E402
 
 TASKS = ("cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture")
 BLOCK = 4
@@ -165,10 +164,10 @@ def page(rows: list[dict[str, Any]], out: Path, args: argparse.Namespace, second
     lines = [
         "# Our renderer against Mitsuba 3, every task",
         "",
-        "Written by `target/venv/bin/python python/examples/mitsuba_agreement.py "
+        "Written by `target/venv/bin/python -m studies mitsuba-agreement "
         + " ".join(sys.argv[1:]) + "` (docs/mitsuba.md, \"Agreement\").",
         "Each task's scene is described once, in its Rust file: `pathtracer export` writes it and",
-        "`python/examples/mitsuba_export.py` loads the description into Mitsuba 3 (`llvm_ad_rgb`,",
+        "`studies/mitsuba/_export.py` loads the description into Mitsuba 3 (`llvm_ad_rgb`,",
         "`path` integrator); the equivalent choices Mitsuba needs are listed in",
         "[../tasks.md](../tasks.md), \"The same scenes in Mitsuba 3\".",
         "",
@@ -256,7 +255,7 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> None:
     args = parse(argv)
-    from mitsuba_scene import load_mitsuba
+    from studies.mitsuba._scene import load_mitsuba
 
     mi = load_mitsuba()
     binary = mx.pathtracer_binary()
@@ -277,7 +276,7 @@ def main(argv: list[str] | None = None) -> None:
     with open(out / "agreement.json", "w") as f:
         json.dump([{k: v for k, v in r.items() if k != "images"} for r in rows], f, indent=1)
     page_path = out.parent / f"{out.name}.md"
-    page_path.write_text(page(rows, out, args, seconds) + "\n")
+    _page.write(page_path, page(rows, out, args, seconds), runs=out)
     print(page_path)
 
 

@@ -5,11 +5,11 @@ Mitsuba 3 under a differentiable integrator (``prb_projective`` where a paramete
 geometry, ``prb`` for TEXTURE's texels; ``INTEGRATORS``), the target rendered with the run's
 seed, and Adam (beta 0.9 / 0.999, eps 1e-8, bias correction; the task's learning rate, the
 export's ``defaults``) on the image MSE from the task's start, with the gradient
-dL/dtheta = Mitsuba's dL/d(scene) times the exporter's d(scene)/dtheta (mitsuba_chain.py),
+dL/dtheta = Mitsuba's dL/d(scene) times the exporter's d(scene)/dtheta (_chain.py),
 theta clamped to the task's box after each step as our runs do. Every render uses the run's
 seed (common random numbers, as in our renderer's runs).
 
-    target/venv/bin/python python/examples/mitsuba_gradient.py \\
+    target/venv/bin/python -m studies mitsuba-gradient \\
         --tasks cup,shadow,occlusion,gi,sort,caustic,texture --seeds 0,1,2 \\
         --scale 0.25,sort=0.5,texture=1 --iterations 100,gi=60,sort=60,texture=1000 \\
         --out docs/results/mitsuba-gradient
@@ -31,7 +31,6 @@ from typing import Any
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
 
 TASKS = ("cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture")
 # prb_projective where a parameter moves geometry (it adds the boundary terms of moving
@@ -79,7 +78,7 @@ class Adam:
 
 
 def make_twin(mi, task: str, scale: float | None):
-    import mitsuba_chain as mc
+    from studies.mitsuba import _chain as mc
 
     if task == "texture":
         return mc.TextureTwin(mi, INTEGRATORS[task], scale=scale)
@@ -88,9 +87,9 @@ def make_twin(mi, task: str, scale: float | None):
 
 def one_run(mi, task: str, seed: int, scale: float | None, cap: int | None, out: Path,
             stop_at: float | None = None) -> dict[str, Any]:
-    from mitsuba_files import write_csv, write_png
+    from studies.mitsuba._files import write_csv, write_png
 
-    import mitsuba_twin as mt
+    from studies.mitsuba import _twin as mt
 
     twin = make_twin(mi, task, scale)
     d = twin.defaults
@@ -197,10 +196,10 @@ def main(argv: list[str] | None = None) -> int:
                 run_dir.mkdir(exist_ok=True)
                 append_run(out / "runs.csv", one_run(mi, task, seed, scales[task], caps[task], run_dir, stop))
     if a.page or a.page_only:
-        import mitsuba_gradient_page as page
+        from studies.mitsuba import _gradient_page as page
 
         args = [x for x in (argv if argv is not None else sys.argv[1:]) if x not in ("--page", "--page-only")]
-        page.write(out, " ".join(["mitsuba_gradient.py"] + args + ["--page"]))
+        page.write(out, " ".join(["-m studies mitsuba-gradient"] + args + ["--page"]))
     return 0
 
 

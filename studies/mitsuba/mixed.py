@@ -2,9 +2,9 @@
 (seen only through its shadow, a plateau for Mitsuba's gradient) by plateau_free's estimate,
 the wall's RGB reflectance by Mitsuba's own AD, through plateau_free.drjit.PlateauFreeOp.
 
-    target/venv/bin/python python/examples/mitsuba_mixed.py --out out/mitsuba-mixed [--seed S]
+    target/venv/bin/python -m studies mitsuba-mixed --out out/mitsuba-mixed [--seed S]
 
-The scene is python/examples/mitsuba_scene.py's (docs/tasks.md's SHADOW) with Mitsuba's ``prb``
+The scene is studies/mitsuba/_scene.py's (docs/tasks.md's SHADOW) with Mitsuba's ``prb``
 integrator (a path tracer that differentiates the reflectance) at depth 6. The target image has
 the sphere at the task's target (-1.5, 1.0) and the wall's reflectance at ``--rho-target``
 (default 0.45, 0.6, 0.3); the run starts from the task's start (-0.5, 2.5) and the scene's grey
@@ -14,10 +14,10 @@ reflectance Mitsuba's gradient and the position ours (``--samples`` renders at p
 positions); one ``mi.ad.Adam`` steps both. The paper's SHADOW settings by default (N = 2,
 sigma0 = 0.5 annealed as the paper's, LR 0.02, 400 iterations), at ``--scale 0.5`` of
 256x192 and ``--spp 16`` to fit a few minutes on two cores. Every render uses the run's seed
-(common random numbers, as mitsuba_optimize.py's default ``--crn fixed``). Writes
+(common random numbers, as optimize.py's default ``--crn fixed``). Writes
 ``summary.json`` and ``history.csv`` into ``--out``.
 
-    target/venv/bin/python python/examples/mitsuba_mixed.py --page docs/results/mitsuba-mixed
+    target/venv/bin/python -m studies mitsuba-mixed --page docs/results/mitsuba-mixed
 
 writes ``docs/results/mitsuba-mixed.md``, a table of the runs in ``seed-<k>/`` under that folder.
 """
@@ -32,8 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
-import mitsuba_scene as ms  # imports no mitsuba itself
-from mitsuba_files import write_csv
+from studies.mitsuba import _scene as ms  # imports no mitsuba itself
+from studies.mitsuba._files import write_csv
+from studies import _page
 
 RHO_START = (0.7, 0.7, 0.7)
 PAPER_PARAM_MSE = 1.81e-3
@@ -154,8 +155,8 @@ def write_page(folder: Path) -> dict:
     lines = [
         "# SHADOW on Mitsuba 3, position by plateau_free, wall reflectance by Mitsuba's AD",
         "",
-        "Written by `target/venv/bin/python python/examples/mitsuba_mixed.py --page "
-        f"{folder}` from the runs of `python/examples/mitsuba_mixed.py --seed K --out {folder}/seed-K`",
+        "Written by `target/venv/bin/python -m studies mitsuba-mixed --page "
+        f"{folder}` from the runs of `studies/mitsuba/mixed.py --seed K --out {folder}/seed-K`",
         "(see [../mitsuba.md](../mitsuba.md)). One `dr.backward` per iteration gives the sphere's",
         "position plateau_free's gradient (`plateau_free.drjit.PlateauFreeOp`) and the wall's RGB",
         "reflectance Mitsuba's (`prb`); one `mi.ad.Adam` steps both. The paper's parameter MSE",
@@ -177,7 +178,7 @@ def write_page(folder: Path) -> dict:
     reached = sum(s["reached_paper_param_mse"] for s in summaries)
     lines += ["", f"Reached the paper's parameter MSE: {reached} of {len(summaries)} seeds run."]
     page = folder.parent / (folder.name + ".md")
-    page.write_text("\n".join(lines) + "\n")
+    _page.write(page, lines, runs=folder)
     print(page.read_text())
     return {"seeds": len(summaries), "reached": reached}
 

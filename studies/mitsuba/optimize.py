@@ -4,17 +4,17 @@
 One command runs any task of docs/tasks.md on its Mitsuba twin (``--task``, default shadow)
 with the tasks' default method, ``polished`` (the paper's loop, then the adaptive search):
 
-    python python/examples/mitsuba_optimize.py --task cup --out out/mitsuba-cup [--seed S]
-    python python/examples/mitsuba_optimize.py --task gi --seeds 3 --out out/mitsuba-gi
+    python -m studies mitsuba-optimize --task cup --out out/mitsuba-cup [--seed S]
+    python -m studies mitsuba-optimize --task gi --seeds 3 --out out/mitsuba-gi
 
-A task other than SHADOW runs on its twin (mitsuba_twin.py: the task's export, moved by the
+A task other than SHADOW runs on its twin (_twin.py: the task's export, moved by the
 exporter) with the task's supplemental Table 1 row from the export, at the resolution and
-budget of ``--scale`` and ``--budget-scale`` (default: the task's in mitsuba_twin_runs.SETTINGS),
+budget of ``--scale`` and ``--budget-scale`` (default: the task's in twins.SETTINGS),
 ``--method polished|adaptive|plateau``; it writes ``OUT/<task>-seed-<k>.json`` with the final and
-target images and, with ``--seeds``, the page ``OUT.md`` (mitsuba_twin_runs.py). The options
+target images and, with ``--seeds``, the page ``OUT.md`` (twins.py). The options
 below that name SHADOW are SHADOW's only.
 
-SHADOW (the scene: mitsuba_scene.py) has the full study of issue 13: the paper's Table 1
+SHADOW (the scene: _scene.py) has the full study of issue 13: the paper's Table 1
 settings (N=2, sigma0=0.5, 32 spp, LR 0.02, 400 iterations), the renderer a black box (image
 MSE against the target), optimised
 
@@ -28,14 +28,14 @@ MSE against the target), optimised
 
 One run:
 
-    python python/examples/mitsuba_optimize.py --method plateau --out out/mitsuba-shadow [--seed S]
+    python -m studies mitsuba-optimize --method plateau --out out/mitsuba-shadow [--seed S]
 
 writes target.png, initial.png, final.png (plateau-free), ad_final.png (Mitsuba AD), history.csv,
 ad_history.csv, convergence.png and summary.json into the output folder.
 
 The per-seed study and its results page (docs/results/mitsuba.md):
 
-    python python/examples/mitsuba_optimize.py --method plateau --seeds 5 --out docs/results/mitsuba
+    python -m studies mitsuba-optimize --method plateau --seeds 5 --out docs/results/mitsuba
 
 runs seeds 0..4 into docs/results/mitsuba/seed-<k>/ (a seed whose summary.json exists is
 kept; --force reruns it), Mitsuba's AD once into docs/results/mitsuba/ad/, and writes
@@ -44,8 +44,8 @@ docs/results (--page-only rewrites the page from the runs alone).
 
 plateau-free's general-purpose adaptive search instead of the paper's loop (no Mitsuba AD):
 
-    python python/examples/mitsuba_optimize.py --method adaptive --out out/mitsuba-adaptive [--seed S]
-    python python/examples/mitsuba_optimize.py --method adaptive --seeds 5 --out docs/results/mitsuba-adaptive
+    python -m studies mitsuba-optimize --method adaptive --out out/mitsuba-adaptive [--seed S]
+    python -m studies mitsuba-optimize --method adaptive --seeds 5 --out docs/results/mitsuba-adaptive
 
 runs ``plateau_free.minimize(fun, x0, method="adaptive", budget=samples x iterations, sigma0=sigma0,
 seed=seed)`` (the paper's budget: 2 x 400 = 800 renders) on the same objective, one row of
@@ -55,8 +55,8 @@ to run and their order, --stop-at HH:MM starts no new seed after that time.
 
 The paper's loop polished by the adaptive search (no Mitsuba AD):
 
-    python python/examples/mitsuba_optimize.py --method polished --out out/mitsuba-polished [--seed S]
-    python python/examples/mitsuba_optimize.py --method polished --seeds 5 --out docs/results/mitsuba-polished
+    python -m studies mitsuba-optimize --method polished --out out/mitsuba-polished [--seed S]
+    python -m studies mitsuba-optimize --method polished --seeds 5 --out docs/results/mitsuba-polished
 
 runs ``plateau_free.minimize(fun, x0, method="polished", sigma0=sigma0, lr=lr, samples=samples,
 budget=samples x iterations, polish=0.25, seed=seed)`` (the paper's SHADOW settings, Table 1:
@@ -74,9 +74,9 @@ the target keeps the run's seed.
 Needs mitsuba: scripts/install-mitsuba installs it (pinned) into target/venv; and the package
 itself: `pip install plateau-free` (or `pip install ./python` from a clone of the repository).
 
-The example's modules, beside this file: mitsuba_scene.py (the scene), mitsuba_runs.py (one
-seed's run), mitsuba_ad.py (Mitsuba's own gradient), mitsuba_report.py (the results pages),
-mitsuba_files.py (images, tables, plots), mitsuba_twin.py and mitsuba_twin_runs.py (the other
+The example's modules, beside this file: _scene.py (the scene), _runs.py (one
+seed's run), _ad.py (Mitsuba's own gradient), _report.py (the results pages),
+_files.py (images, tables, plots), _twin.py and twins.py (the other
 tasks); this file is the command line and SHADOW's per-seed study.
 """
 
@@ -88,14 +88,12 @@ import sys
 import time
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-
-import mitsuba_scene as ms  # noqa: E402  (imports no mitsuba itself)
-from mitsuba_twin_runs import TASKS  # noqa: E402
-from mitsuba_ad import ad_keys, run_ad  # noqa: E402
-from mitsuba_report import write_page, write_page_adaptive  # noqa: E402
-from mitsuba_runs import replot, run_one, settings, time_renders  # noqa: E402
+from studies import _page
+from studies.mitsuba import _scene as ms  # imports no mitsuba itself
+from studies.mitsuba._ad import ad_keys, run_ad
+from studies.mitsuba._report import write_page, write_page_adaptive
+from studies.mitsuba._runs import replot, run_one, settings, time_renders
+from studies.mitsuba.twins import TASKS
 
 
 def main(argv=None) -> int:
@@ -113,7 +111,7 @@ def main(argv=None) -> int:
     p.add_argument("--seeds", type=int, default=0, help="run seeds 0..K-1 into OUT/seed-<k> and write OUT.md")
     p.add_argument("--page-only", action="store_true", help="with --seeds: only rewrite the results page")
     p.add_argument("--page", default=None, help="the results page (default: OUT.md)")
-    p.add_argument("--notes", default=None, help="markdown appended to the page (default: mitsuba_notes.md beside this file)")
+    p.add_argument("--notes", default=None, help="markdown appended to the page (default: NOTES.md beside this file)")
     p.add_argument("--run-pathtracer", action="store_true",
                    help="with --seeds: run our renderer (cargo) for the seeds docs/results lacks")
     p.add_argument("--force", action="store_true", help="with --seeds: rerun seeds that have a summary.json")
@@ -244,8 +242,8 @@ SHADOW_ONLY = ("page", "notes", "run_pathtracer", "force", "run_seeds", "plateau
 
 
 def main_twin(p, args) -> int:
-    """``--task`` other than shadow: the task's Table 1 row on its twin (mitsuba_twin_runs.py)."""
-    import mitsuba_twin_runs as tr
+    """``--task`` other than shadow: the task's Table 1 row on its twin (twins.py)."""
+    from studies.mitsuba import twins as tr
 
     for name in SHADOW_ONLY:
         if getattr(args, name) != p.get_default(name):
@@ -277,7 +275,7 @@ def main_twin(p, args) -> int:
                                                    "param_mse", "image_mse", "seconds_per_render")}), flush=True)
     if args.seeds:
         page = out.parent / f"{out.name}.md"
-        page.write_text(tr.page(tr.stored_runs(out), out, seeds, (args.task,)) + "\n")
+        _page.write(page, tr.page(tr.stored_runs(out), out, seeds, (args.task,)), runs=out)
         print(page)
     return 0
 

@@ -1,6 +1,6 @@
 """Every task on both renderers, beside the paper's numbers: docs/results/mitsuba-tasks.md.
 
-    target/venv/bin/python python/examples/mitsuba_tasks_page.py
+    target/venv/bin/python -m studies mitsuba-tasks
 
 reads only committed results (it renders nothing and needs no mitsuba):
 
@@ -11,8 +11,8 @@ reads only committed results (it renders nothing and needs no mitsuba):
 * ours on our renderer: ``docs/results/seeds-polished/<task>[-seed<k>]/summary.json``
   (``pathtracer seeds``, the tasks' default method, polished);
 * ours on Mitsuba: ``docs/results/mitsuba-twins/<task>-seed-<k>.json``
-  (mitsuba_twin_runs.py) and, for SHADOW, ``docs/results/mitsuba-polished/seed-<k>/summary.json``
-  (mitsuba_optimize.py, full resolution);
+  (twins.py) and, for SHADOW, ``docs/results/mitsuba-polished/seed-<k>/summary.json``
+  (optimize.py, full resolution);
 * Mitsuba's own gradient on Mitsuba: ``docs/results/mitsuba-gradient/runs.csv`` (columns task,
   seed, integrator, iterations, spp, scale, lr, start_param_mse, final_param_mse,
   start_image_mse, final_image_mse, seconds_per_iteration); a missing file, row or column is
@@ -34,6 +34,8 @@ import sys
 import tempfile
 from pathlib import Path
 from typing import Any, Optional
+
+from studies import _page
 
 HERE = Path(__file__).resolve().parent
 TASKS = ("cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture")
@@ -154,8 +156,7 @@ def read_gradient(results: Path) -> dict[tuple[str, int], Row]:
 
 def paper_from_export(task: str) -> Optional[dict[str, float]]:
     """The paper's numbers for ``task`` as ``pathtracer export`` states them (None: TEXTURE)."""
-    sys.path.insert(0, str(HERE))
-    import mitsuba_export as mx
+    from studies.mitsuba import _export as mx
 
     with tempfile.TemporaryDirectory() as tmp:
         subprocess.run([mx.pathtracer_binary(), "export", task, "--scale", "0.125", "--spp", "1", "--out", tmp],
@@ -285,9 +286,9 @@ def main(argv: Optional[list[str]] = None) -> None:
     results = root / "docs" / "results"
     out = Path(args.out) if args.out else results / "mitsuba-tasks.md"
     papers = {t: paper_from_export(t) for t in TASKS}
-    command = "target/venv/bin/python python/examples/mitsuba_tasks_page.py" + "".join(
+    command = "target/venv/bin/python -m studies mitsuba-tasks" + "".join(
         f" {a}" for a in (argv if argv is not None else sys.argv[1:]))
-    out.write_text(build_page(results, out.parent.resolve(), papers, command))
+    _page.write(out, build_page(results, out.parent.resolve(), papers, command))
     print(out)
 
 

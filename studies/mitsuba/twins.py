@@ -1,6 +1,6 @@
 """The tasks' default method (``polished``) on their Mitsuba twins, through the Python package.
 
-For each task and seed: the task's Mitsuba twin (mitsuba_twin.py, moved by the exporter),
+For each task and seed: the task's Mitsuba twin (_twin.py, moved by the exporter),
 the target rendered with the run's seed, and ``plateau_free.minimize(fun, start,
 method="polished", sigma0, lr, samples, budget=samples x iterations, seed, bounds)`` with the
 task's supplemental Table 1 row as the export gives it (``defaults``), every render with the
@@ -9,7 +9,7 @@ renderer's runs). Each task runs at its setting in ``SETTINGS`` (resolution and 
 multipliers that fit the 2 shared cores of the machine the page was made on; the page says
 so), or at ``--scale`` and ``--budget-scale`` when given.
 
-    target/venv/bin/python python/examples/mitsuba_twin_runs.py --tasks cup,occlusion \\
+    target/venv/bin/python -m studies mitsuba-twins --tasks cup,occlusion \\
         --seeds 0,1,2 --out docs/results/mitsuba-twins
 
 writes ``OUT/<task>-seed-<k>.json`` and its final and target images ``OUT/<task>-seed-<k>-final.png``,
@@ -30,13 +30,12 @@ from typing import Any
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
+from studies import _page
+from studies.mitsuba._files import write_png
 
-from mitsuba_files import write_png  # noqa: E402
 
 TASKS = ("cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture")
-# SHADOW has its own study at full resolution (mitsuba_optimize.py, docs/results/mitsuba-polished.md).
+# SHADOW has its own study at full resolution (optimize.py, docs/results/mitsuba-polished.md).
 DEFAULT_TASKS = tuple(t for t in TASKS if t != "shadow")
 # (resolution multiplier, budget multiplier) per task: half resolution at the paper's budget
 # where that fits in 30 minutes a run; GI (0.7 s a render at half resolution with 5 jobs on
@@ -52,7 +51,7 @@ SETTINGS: dict[str, tuple[float, float]] = {
 def target_theta(task: str, scale: float | None) -> np.ndarray:
     import tempfile
 
-    import mitsuba_export as mx
+    from studies.mitsuba import _export as mx
 
     with tempfile.TemporaryDirectory() as tmp:
         return np.array(mx.theta_of(mx.run_export(task, tmp, "target", scale=scale)), dtype=np.float64)
@@ -76,7 +75,7 @@ def one_run(mi, task: str, seed: int, scale: float, budget_scale: float, out: Pa
             method: str = "polished") -> dict[str, Any]:
     import plateau_free
 
-    import mitsuba_twin as mt
+    from studies.mitsuba import _twin as mt
 
     twin = mt.Twin(mi, task, scale=scale)
     d = twin.desc["defaults"]
@@ -120,12 +119,12 @@ def one_run(mi, task: str, seed: int, scale: float, budget_scale: float, out: Pa
 
 
 def command_line() -> str:
-    return "target/venv/bin/python python/examples/mitsuba_twin_runs.py " + " ".join(sys.argv[1:])
+    return "target/venv/bin/python -m studies mitsuba-twins " + " ".join(sys.argv[1:])
 
 
 def images_of_stored(mi, row: dict[str, Any], out: Path) -> bool:
     """Renders a stored run's final and target images (if missing) from its final theta."""
-    import mitsuba_twin as mt
+    from studies.mitsuba import _twin as mt
 
     task, seed = row["task"], int(row["seed"])
     final_png = out / f"{task}-seed-{seed}-final.png"
@@ -140,7 +139,7 @@ def images_of_stored(mi, row: dict[str, Any], out: Path) -> bool:
 
 
 def complete_command(task: str, seeds: list[int], out: Path) -> str:
-    return ("nice -n 5 target/venv/bin/python python/examples/mitsuba_twin_runs.py "
+    return ("nice -n 5 target/venv/bin/python -m studies mitsuba-twins "
             f"--tasks {task} --seeds {','.join(map(str, seeds))} --out {out}")
 
 
@@ -154,10 +153,10 @@ def page(rows: list[dict[str, Any]], out: Path, seeds: list[int], tasks: tuple[s
     lines = [
         "# The tasks' default method on their Mitsuba twins",
         "",
-        "Written by `target/venv/bin/python python/examples/mitsuba_twin_runs.py --page-only "
+        "Written by `target/venv/bin/python -m studies mitsuba-twins --page-only "
         f"--out {out}` from the stored runs in `{out}/` (docs/mitsuba.md, \"Every task on Mitsuba\").",
         "Each task's scene is its export (`pathtracer export`), moved at every render by the",
-        "exporter (python/examples/mitsuba_twin.py); the optimiser is the Python package's",
+        "exporter (studies/mitsuba/_twin.py); the optimiser is the Python package's",
         "`minimize(method=\"polished\")` with the task's supplemental Table 1 row, from the task's",
         "start, every render with the run's seed.",
         "",
@@ -216,7 +215,7 @@ def main(argv: list[str] | None = None) -> None:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     if not args.page_only:
-        from mitsuba_scene import load_mitsuba
+        from studies.mitsuba._scene import load_mitsuba
 
         mi = load_mitsuba()
         for task in tasks:
@@ -236,7 +235,7 @@ def main(argv: list[str] | None = None) -> None:
                 print(f"{task} seed {seed}: param MSE {row['start_param_mse']:.3e} -> {row['param_mse']:.3e} "
                       f"({row['seconds']:.0f} s)", flush=True)
     page_path = out.parent / f"{out.name}.md"
-    page_path.write_text(page(stored_runs(out), out, [0, 1, 2]) + "\n")
+    _page.write(page_path, page(stored_runs(out), out, [0, 1, 2]), runs=out)
     print(page_path)
 
 

@@ -1,6 +1,6 @@
 """What the framework adapters cost over calling the library directly.
 
-    target/venv/bin/python python/benchmarks/adapters.py     # after scripts/test-all (or pip install "./python[jax,torch,scipy]")
+    target/venv/bin/python -m studies adapters     # after scripts/test-all (or pip install "./python[jax,torch,scipy]")
 
 A trivial objective (``f(x) = 0.0``, or ``f(X) = zeros(N)`` batched), so that only the
 machinery is timed; best of ``--repeats`` runs of ``--calls`` calls each, microseconds per call.

@@ -1,6 +1,6 @@
 """The cost of the binding per evaluation of a trivial Python objective.
 
-    python python/benchmarks/overhead.py            # after pip install ./python
+    python -m studies overhead            # after pip install ./python
 
 Per evaluation, an estimate with an unbatched ``fun`` re-acquires the GIL, checks for signals,
 builds one numpy array for the point, calls ``fun`` and reads a float. The overhead is the time

@@ -1,6 +1,6 @@
 """What plateau_free.drjit.PlateauFreeOp costs over calling the estimator directly.
 
-    target/venv/bin/python python/benchmarks/drjit_overhead.py   # after scripts/install-mitsuba
+    target/venv/bin/python -m studies drjit-overhead   # after scripts/install-mitsuba
 
 Times one backward pass through the op (``dr.custom``, ``dr.backward`` of a weighted sum, the
 gradient read back) against ``PlateauFreeGradient.estimate`` on the same objective
@@ -12,14 +12,11 @@ backward pass; a real render (tens of milliseconds and more) dwarfs it.
 from __future__ import annotations
 
 import os
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
-import mitsuba_scene as ms  # noqa: E402  (sets DRJIT_LIBLLVM_PATH through load_mitsuba)
+from studies.mitsuba import _scene as ms  # sets DRJIT_LIBLLVM_PATH through load_mitsuba
 
 
 def main() -> None:

@@ -1,7 +1,7 @@
 """Speed-up of plateau_free.ray.RayEvaluator against the number of workers, and its overhead.
 
-    python python/benchmarks/ray_scaling.py            # after pip install "./python[ray]"
-    python python/benchmarks/ray_scaling.py --cost 0.1 --samples 32 --workers 1 2 4 8
+    python -m studies ray-scaling            # after pip install "./python[ray]"
+    python -m studies ray-scaling --cost 0.1 --samples 32 --workers 1 2 4 8
 
 Starts a local Ray instance (``--address`` joins a running cluster instead) and prints:
 

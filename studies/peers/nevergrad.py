@@ -1,7 +1,7 @@
 """plateau_free's optimizers against nevergrad's NGOpt and CMA on nevergrad's own functions, at
 equal budgets, through nevergrad's ``minimize``; writes ``docs/results/nevergrad.md``.
 
-    python python/benchmarks/nevergrad_compare.py      # after pip install "./python[nevergrad]"
+    python -m studies nevergrad      # after pip install "./python[nevergrad]"
 
 Each function is nevergrad's ``ArtificialFunction`` (a random translation, seeded per run, so
 the optimum is not at the start), in dimension 10, with a budget of 1000 evaluations (100 per
@@ -29,6 +29,8 @@ from nevergrad.functions import ArtificialFunction
 
 import plateau_free
 import plateau_free.nevergrad  # noqa: F401  (registers PlateauFree and PlateauFreePaper)
+
+from studies import _page
 
 OPTIMIZERS = ["PlateauFree", "PlateauFreePaper", "NGOpt", "CMA"]
 # A smooth bowl, a multimodal one, and two of nevergrad's step functions (zero gradient almost
@@ -110,7 +112,7 @@ def main() -> None:
 def write(args: argparse.Namespace, rows: List[str], cost: Dict[str, float], seconds: float) -> None:
     text = f"""# plateau_free in nevergrad: PlateauFree against NGOpt and CMA
 
-Written by `python python/benchmarks/nevergrad_compare.py` (nevergrad {ng.__version__},
+Written by `python -m studies nevergrad` (nevergrad {ng.__version__},
 plateau_free {plateau_free.__version__}, Python {platform.python_version()}; {seconds:.0f} s).
 
 nevergrad's `ArtificialFunction`s in dimension {args.dimension} (a random translation per
@@ -137,8 +139,7 @@ Nearly all of it is nevergrad's own bookkeeping of each candidate (its `Paramete
 archive): its `RandomSearch`, which computes next to nothing, takes
 {cost['random'] * 1e6:.1f} us per evaluation on the same function and budget.
 """
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(text)
+    _page.write(args.out, text)
     print(text)
 
 

@@ -5,7 +5,7 @@
 By hand (what ``scripts/compare-peers`` does)::
 
     cargo run --release --example compare -- --export target/compare-peers/instances.txt
-    target/venv-peers/bin/python python/benchmarks/peers.py \\
+    target/venv-peers/bin/python -m studies peers \\
         --instances target/compare-peers/instances.txt --out target/compare-peers/peers.csv
 
 The instances (function, dimension, seed: the shift, the rotation and the start point) are

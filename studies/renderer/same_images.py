@@ -6,7 +6,7 @@ value (as bits: -0.0 and 0.0 differ, NaNs compare by payload). The files' bytes 
 compared: the EXR writer may order blocks differently between two writes of one image.
 Exit status 1 when any value differs.
 
-    target/venv/bin/python python/examples/same_images.py target/pathtracer-before target/release/pathtracer
+    target/venv/bin/python -m studies same-images target/pathtracer-before target/release/pathtracer
 
 Reads EXR with mitsuba's Bitmap (``scripts/install-mitsuba``).
 """
@@ -21,7 +21,6 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 TASKS = ("cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture")
 
@@ -37,7 +36,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("new", help="pathtracer binary rendering on one thread")
     p.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)
     args = p.parse_args(argv)
-    from mitsuba_scene import load_mitsuba
+    from studies.mitsuba._scene import load_mitsuba
 
     mi = load_mitsuba("scalar_rgb")
     differing = 0

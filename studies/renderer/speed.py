@@ -1,7 +1,7 @@
 """Our renderer's time per render against Mitsuba 3's (``llvm_ad_rgb``), side by side.
 
 For each task, at its target parameters, resolution, spp and max depth (``pathtracer export``
-gives Mitsuba the same scene, mitsuba_export.py), both renderers render in one process run,
+gives Mitsuba the same scene, studies/mitsuba/_export.py), both renderers render in one process run,
 interleaved: every repetition times our renderer (``pathtracer render TASK --target --repeat
 K``, which prints the median of K back-to-back renders, scene set-up excluded), then, if
 ``--baseline`` names another pathtracer binary (e.g. the build before a change), that one the
@@ -27,7 +27,7 @@ queued).
 Both renderers use the same number of threads (``--threads``, default: all cores; ours through
 ``--threads``, Mitsuba's through ``dr.set_thread_count``).
 
-    target/venv/bin/python python/examples/render_speed.py --out docs/results/render-speed.md
+    target/venv/bin/python -m studies render-speed --out docs/results/render-speed.md
 
 Needs mitsuba (``scripts/install-mitsuba``) and the pathtracer binary (``cargo build --release
 -p pathtracer``; ``$PATHTRACER`` names another).
@@ -46,10 +46,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
 
-import mitsuba_export as mx  # noqa: E402
+from studies.mitsuba import _export as mx
+from studies import _page
 
 TASKS = ("cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture")
 GOAL = 0.5  # issue 25 item 4: at most half Mitsuba's time per render
@@ -117,7 +116,7 @@ class MitsubaTask:
 
 
 def load_mitsuba(threads: int) -> tuple[Any, Any]:
-    from mitsuba_scene import load_mitsuba as load
+    from studies.mitsuba._scene import load_mitsuba as load
 
     mi = load("llvm_ad_rgb")
     import drjit as dr
@@ -189,7 +188,7 @@ def page(args: argparse.Namespace, rows: list[dict[str, Any]], load: tuple[float
         lines.append("| " + " | ".join(cells) + " |")
     compiled = sum(r["compiled"] for r in rows)
     timed = sum(r["timed_renders"] for r in rows)
-    cmd = "target/venv/bin/python python/examples/render_speed.py " + " ".join(args.argv)
+    cmd = "target/venv/bin/python -m studies render-speed " + " ".join(args.argv)
     cpu = _cpu_model()
     return "\n".join([
         "# Render time: our path tracer against Mitsuba 3",
@@ -263,7 +262,7 @@ def main(argv: list[str] | None = None) -> None:
     text = page(args, rows, (load0, os.getloadavg()[0]))
     print(text)
     if args.out:
-        Path(args.out).write_text(text)
+        _page.write(args.out, text)
 
 
 if __name__ == "__main__":
