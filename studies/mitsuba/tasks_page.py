@@ -2,7 +2,8 @@
 
     target/venv/bin/python -m studies mitsuba-tasks
 
-reads only committed results (it renders nothing and needs no mitsuba):
+reads only the runs of other studies (it renders nothing and needs no mitsuba); their commands
+make them, and the repository does not keep them:
 
 * the paper's numbers (Fischer & Ritschel, "Plateau-reduced Differentiable Path Tracing",
   CVPR 2023: main paper Table 2, plateau and Mitsuba 3 columns; Table 3, GPU seconds an
@@ -246,7 +247,8 @@ def build_page(results: Path, page_dir: Path, papers: dict[str, Optional[dict[st
     lines = [
         "# Every task on both renderers, beside the paper",
         "",
-        f"Written by `{command}` from committed runs (it renders nothing). The paper: Fischer & Ritschel,",
+        f"Written by `{command}` from the runs of other studies, named below (it renders nothing; "
+        "their commands make them, and the repository does not keep them). The paper: Fischer & Ritschel,",
         "\"Plateau-reduced Differentiable Path Tracing\", CVPR 2023, main paper Table 2 (final image /",
         "parameter MSE of its plateau-reduced gradient and of Mitsuba 3's) and Table 3 (GPU seconds an",
         "iteration), as `pathtracer export` states them. Ours on our renderer: the tasks' default method",
