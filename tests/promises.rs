@@ -1,4 +1,4 @@
-//! What every method promises (issue 29), checked over random boxes, starts, seeds and small
+//! What every method promises, checked over random boxes, starts, seeds and small
 //! budgets, for every method: the paper's loop (`Optimizer` with `PlateauFreeGradient` and each
 //! sampler, finite differences, SPSA), `Minimizer` with the adaptive search, `Strategy::Paper`
 //! and the polished loop; each in its callback form and (where it has one) asked and told.

@@ -1,8 +1,8 @@
-"""The measurements of ``docs/results/large-scale.md`` (issue 28 items 1 and 4).
+"""The measurements of ``docs/results/large-scale.md`` 
 
     scripts/large-scale            # the page's command: runs this, then writes the page
 
-**The texture task** (ZeroGrads' task as issue 28 describes it, written here in numpy): the
+**The texture task** (ZeroGrads' task, written here in numpy): the
 renderer is the identity, the parameters a ``3 x r x r`` texture (``n = 3 r^2``), and
 
     loss(x) = mean((x / mean(x) - 1 - (t / mean(t) - 1)) ** 2)

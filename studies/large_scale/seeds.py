@@ -1,5 +1,5 @@
 """``minimize`` on bbob-largescale problems over seeds (``docs/results/large-scale.md``'s
-step-size rules tried, issue 28 item 1): one row per run and evaluation count (1,000, 3,000,
+step-size rules tried): one row per run and evaluation count (1,000, 3,000,
 10,000, 30,000, 100,000, 320,000 and the end), the best value minus ``f_opt`` so far and the
 targets it reaches, appended to ``OUT``. The page's ``tried-seeds-bbob.csv`` is this script's
 output with the wheels named there; the label names the build, nothing else differs.

@@ -119,7 +119,7 @@ def write_page(args, out: Path, seeds: list[int]) -> Path:
                  f"{fmt(r.get('seconds_per_iteration'))} | {fmt(o.get('param_mse'))} | "
                  f"{fmt(o.get('seconds_per_iteration'))} | {o.get('source', 'not in docs/results')} |")
     L += ["", f"At or below the paper's parameter MSE (1.81e-3): **Mitsuba {n_mi} of {len(runs)}** seeds run, "
-          f"ours {n_ours} of {sum(1 for s in seeds if s in ours)}. Goal of issue 13: at least 4 of 5 on Mitsuba.", ""]
+          f"ours {n_ours} of {sum(1 for s in seeds if s in ours)}. The goal: at least 4 of 5 on Mitsuba.", ""]
     fail_mi = sorted(s for s in seeds if s in runs and runs[s].get("param_mse", 0) > PAPER_PARAM_MSE)
     fail_ours = sorted(s for s in seeds if s in ours and ours[s]["param_mse"] > PAPER_PARAM_MSE)
     if fail_mi and all(s in ours for s in seeds if s in runs):
@@ -290,7 +290,7 @@ def write_page_adaptive(args, out: Path, seeds: list[int]) -> Path:
     L += ["", f"At or below the paper's parameter MSE (1.81e-3): **{name} {n_ad} of {len(runs)}** seeds run"
           + (f" (not run: {not_run})" if not_run else "")
           + f"; the paper's loop {paper_on_run} of the same {len(runs)}, {n_paper} of {len(paper)} in all. "
-          "Goal of issue 13: at least 4 of 5 on Mitsuba.", ""]
+          "The goal: at least 4 of 5 on Mitsuba.", ""]
     if runs:
         spr = sorted(r["seconds_per_evaluation"] for r in runs.values())
         loads = [r.get("load_average_at_start") for r in runs.values() if r.get("load_average_at_start") is not None]

@@ -14,7 +14,7 @@ budget of ``--scale`` and ``--budget-scale`` (default: the task's in twins.SETTI
 target images and, with ``--seeds``, the page ``OUT.md`` (twins.py). The options
 below that name SHADOW are SHADOW's only.
 
-SHADOW (the scene: _scene.py) has the full study of issue 13: the paper's Table 1
+SHADOW (the scene: _scene.py) has the full study: the paper's Table 1
 settings (N=2, sigma0=0.5, 32 spp, LR 0.02, 400 iterations), the renderer a black box (image
 MSE against the target), optimised
 

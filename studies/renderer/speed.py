@@ -51,7 +51,7 @@ from studies.mitsuba import _export as mx
 from studies import _page
 
 TASKS = ("cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture")
-GOAL = 0.5  # issue 25 item 4: at most half Mitsuba's time per render
+GOAL = 0.5  # the goal: at most half Mitsuba's time per render
 # Seconds to wait before each renderer's turn, so that none starts while the one before still
 # keeps the cores busy (see the docstring).
 SETTLE = 0.2
@@ -194,7 +194,7 @@ def page(args: argparse.Namespace, rows: list[dict[str, Any]], load: tuple[float
         "# Render time: our path tracer against Mitsuba 3",
         "",
         "Seconds per render at each task's target parameters, resolution, spp and max depth "
-        "(issue 25 item 4: goal ours / Mitsuba <= 0.5). Written by",
+        "(the goal: ours / Mitsuba <= 0.5). Written by",
         "",
         f"    {cmd.strip()}",
         "",
