@@ -4,7 +4,7 @@ use std::cell::{Cell, RefCell};
 
 use plateau_free::{minimize, Error, Metric, Minimizer, Seeded, Stop, Strategy};
 
-/// The staircase: the squared distance of the rounded point to an integer target.
+/// A staircase: the squared distance of the rounded point to an integer target.
 fn staircase(target: &[f64]) -> impl Fn(&[f64]) -> f64 + '_ {
     move |x: &[f64]| {
         x.iter()
@@ -76,7 +76,7 @@ fn staircase_50d_is_solved_with_defaults() {
 
 #[test]
 fn the_papers_loop_is_one_option_away() {
-    // The settings that solve the 3-D staircase: N = 4, lr 0.05, sigma0 1, 400
+    // Settings that solve the 3-D staircase: N = 4, lr 0.05, sigma0 1, 400
     // iterations (1600 evaluations, plus one at the start and one at the final parameters).
     let target = [1.0, 2.0, 3.0];
     let f = staircase(&target);

@@ -334,7 +334,7 @@ proptest! {
     }
 }
 
-/// The case: in 10^4 dimensions, with 2000 evaluations, the adaptive search never
+/// The case: in 10^4 dimensions, with 2000 evaluations, the adaptive search never
 /// evaluated `x0` and returned 22,861 (24,510 here) where `f(x0)` = 20,000.
 #[test]
 fn the_start_counts_in_ten_thousand_dimensions() {

@@ -10,7 +10,7 @@ of linear radiance:
 
 (A, B the block means of a and b; the relative L1 error of the block means). ``error(ours,
 Mitsuba seed 0)`` is the agreement; ``error(Mitsuba seed 1, Mitsuba seed 0)`` is the noise
-floor, what two renders of the same scene by the same renderer differ by. The issue's goal:
+floor, what two renders of the same scene by the same renderer differ by. The goal:
 the agreement within 2 %.
 
     target/venv/bin/python -m studies mitsuba-agreement --out docs/results/mitsuba-agreement
@@ -42,7 +42,7 @@ from studies.mitsuba import _export as mx
 
 TASKS = ("cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture")
 BLOCK = 4
-GOAL = 0.02  # the issue's: within 2 %
+GOAL = 0.02  # the goal: within 2 %
 FLOOR_FACTOR = 1.5  # what the test allows (python/tests/test_mitsuba_agreement.py)
 
 
