@@ -1,4 +1,4 @@
-"""Every task's scene renders alike in our renderer and in Mitsuba 3 (issue 23, item 2).
+"""Every task's scene renders alike in our renderer and in Mitsuba 3.
 
 studies/mitsuba/agreement.py at a low resolution and spp: for each task, at its
 target, ``pathtracer export`` gives the scene, ``pathtracer render`` our image (seed 0) and
