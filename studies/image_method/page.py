@@ -31,6 +31,8 @@ def renders_to_reach(run: Path, summary: dict) -> str:
 
 
 def main() -> None:
+    if len(sys.argv) != 4:
+        sys.exit("usage: python -m studies image-method-page RUNS PAGE COMMAND")
     runs, page, command = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3]
     rows = []
     for run in sorted(runs.iterdir()):

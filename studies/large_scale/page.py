@@ -1,7 +1,7 @@
 """Writes ``docs/results/large-scale.md`` (and its plot) from the csv files of
 ``studies/large_scale/run.py`` in a run directory.
 
-    python page.py OUT PAGE COMMAND
+    python -m studies large-scale-page OUT PAGE COMMAND
 
 ``OUT`` holds ``texture-*.csv`` and ``bbob.csv``; ``PAGE`` is the page to write (the plot goes
 beside it, same name with ``.png``); ``COMMAND`` is the command the page names.
@@ -379,6 +379,8 @@ def bbob_missing(rows: list[Row]) -> list[str]:
 
 
 def main() -> None:
+    if len(sys.argv) != 4:
+        sys.exit("usage: python -m studies large-scale-page OUT PAGE COMMAND")
     out, page, command = sys.argv[1], sys.argv[2], sys.argv[3]
     rows = read(sorted(glob.glob(os.path.join(out, "texture-*.csv"))))
     bbob_path = os.path.join(out, "bbob.csv")

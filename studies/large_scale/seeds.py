@@ -4,8 +4,8 @@ step-size rules tried): one row per run and evaluation count (1,000, 3,000,
 targets it reaches, appended to ``OUT``. The page's ``tried-seeds-bbob.csv`` is this script's
 output with the wheels named there; the label names the build, nothing else differs.
 
-    python seeds.py OUT LABEL N FUNCTIONS SEEDS INSTANCES
-    python seeds.py seeds.csv csa 320 15 0,1,2 1
+    python -m studies large-scale-seeds OUT LABEL N FUNCTIONS SEEDS INSTANCES
+    python -m studies large-scale-seeds seeds.csv csa 320 15 0,1,2 1
 
 ``ask_tell(x0, budget=1000 n, seed=seed, target=f_opt + 1e-8)`` from the suite's ``x0``, as
 ``run.py bbob`` runs it (which fixes the seed at 0), with no wall-time cap.
@@ -55,6 +55,8 @@ def run(w: "csv._writer", label: str, problem: object, fopt: float, key: list[ob
 
 
 def main() -> None:
+    if len(sys.argv) != 7:
+        sys.exit("usage: python -m studies large-scale-seeds OUT LABEL N FUNCTIONS SEEDS INSTANCES")
     import cocoex
 
     out, label, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
