@@ -85,6 +85,34 @@ fn numbers(text: &str, bare: bool) -> Vec<String> {
     out
 }
 
+/// Whether the quoted figure `quoted` is one of the page's numbers: the same digits, or a page
+/// number rounded to the quoted figure's significant digits (`2.6e-8` quotes `2.63e-08`). A
+/// whole number (a count) must be on the page as it is.
+fn on_page(quoted: &str, page: &[String]) -> bool {
+    if page.iter().any(|p| p == quoted) {
+        return true;
+    }
+    let (Ok(q), true) = (quoted.parse::<f64>(), quoted.contains(['.', 'e'])) else {
+        return false;
+    };
+    let mantissa = quoted.split('e').next().unwrap_or("");
+    let digits = mantissa
+        .chars()
+        .filter(char::is_ascii_digit)
+        .skip_while(|d| *d == '0')
+        .count();
+    let Ok(digits) = i32::try_from(digits.max(1)) else {
+        return false;
+    };
+    page.iter().filter_map(|p| p.parse::<f64>().ok()).any(|p| {
+        if p == 0.0 || q == 0.0 {
+            return p == q;
+        }
+        let scale = 10f64.powi(digits - 1 - p.abs().log10().floor() as i32);
+        ((p * scale).round() / scale - q).abs() <= 1e-9 * q.abs()
+    })
+}
+
 /// `text` without inline code (commands and names, not figures) and link targets.
 fn prose(text: &str) -> String {
     let mut out = String::new();
@@ -139,7 +167,7 @@ fn quoted_figures_match_their_pages() {
                 "{}: the marker names {page_name}, which is not a file",
                 file.display()
             );
-            let page: BTreeSet<String> = numbers(&read(&page_path), false).into_iter().collect();
+            let page = numbers(&read(&page_path), false);
             // The paragraph: the lines up to the next blank line.
             let paragraph: Vec<&str> = lines[at + 1..]
                 .iter()
@@ -153,7 +181,7 @@ fn quoted_figures_match_their_pages() {
             );
             for n in numbers(&prose(&paragraph.join("\n")), true) {
                 checked += 1;
-                if !page.contains(&n) {
+                if !on_page(&n, &page) {
                     wrong.push(format!(
                         "{} (line {}): {n} is not on {page_name}",
                         file.display(),
