@@ -10,8 +10,8 @@ from __future__ import annotations
 import runpy
 import sys
 
-# name: (module, what it does). A study's module runs as ``__main__`` with ``NAME ARGS`` as its
-# command line, so ``python -m studies NAME --help`` shows its options.
+# name: (module, what it does). A study's module runs as ``__main__`` with ARGS as its
+# arguments, so ``python -m studies NAME --help`` shows its options.
 STUDIES: dict[str, tuple[str, str]] = {
     "mitsuba-optimize": ("studies.mitsuba.optimize",
                          "any task on Mitsuba 3 with the Python package; SHADOW against Mitsuba's "
@@ -70,7 +70,7 @@ def main(argv: list[str]) -> int:
     if name not in STUDIES:
         print(f"unknown study {name!r}\n\n{listing()}", file=sys.stderr)
         return 2
-    sys.argv = [f"python -m studies {name}", *rest]
+    sys.argv = [name, *rest]  # runpy puts the module's file in sys.argv[0]
     runpy.run_module(STUDIES[name][0], run_name="__main__", alter_sys=True)
     return 0
 
