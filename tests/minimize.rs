@@ -139,9 +139,9 @@ fn sigma_grows_on_a_plateau() {
 
 /// An objective whose input is rounded to single precision, as a renderer's geometry is: below
 /// a spread of about 3e-8 its points tie. Such ties are the objective's resolution, not a
-/// plateau to cross: the run must end and restart (the CUP task sat 150 generations at spreads
-/// of 1e-8 to 1e-6 before this rule; with the plateau rule alone these seeds restart 0 or 1
-/// times in 800 evaluations, with it twice each).
+/// plateau to cross: the run must end and restart (without this rule it can sit for hundreds
+/// of generations at spreads of 1e-8 to 1e-6; with it these seeds restart twice each in 800
+/// evaluations).
 #[test]
 fn ties_at_the_objectives_resolution_end_the_run() {
     let f = |x: &[f64]| {
