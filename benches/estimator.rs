@@ -5,7 +5,7 @@
 //! 10^6, for each sampler. The objective reads one coordinate, so what is measured is the
 //! drawing, the perturbed points, the checks and the gradient's accumulation. The results
 //! and their ratios to the baseline are recorded in `docs/estimators.md` ("Cost"); the
-//! target of issue 10 is radial at n = 49,152 within 1.5x of the normals.
+//! target is radial at n = 49,152 within 1.5x of the normals.
 //!
 //! Timing is best-of-blocks: each sample times short blocks of iterations and keeps the
 //! fastest block. The machine is shared; a block that the scheduler interrupted is slower,

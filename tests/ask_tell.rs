@@ -1,8 +1,8 @@
 //! Ask and tell: the optimiser hands out each iteration's points and takes their values back.
 //!
 //! The proof that the ask-and-tell form and the callback form are one implementation: both
-//! give, bit for bit, results recorded from the callback form before ask and tell existed
-//! (`PINNED`, printed by a program run on the commit before, 1feac89), and each other's
+//! give, bit for bit, results recorded from the callback form when it was the only form
+//! (`PINNED`), and each other's
 //! results for every form of objective, with and without parallel evaluation. Then the
 //! errors: asking twice, telling without asking, the wrong number of values, non-finite
 //! values, a result taken too early.
@@ -121,14 +121,10 @@ fn show_history(tag: &str, h: &plateau_free::History) -> String {
     )
 }
 
-/// Results of the callback form recorded before ask and tell existed (commit 1feac89),
-/// changed since only where issue 29 changed the behaviour: every `minimize` run evaluates
-/// its start first (one evaluation more: `batch bounds`, `noresart`, and `paper`, whose budget
-/// went from 801 to 802 so that it still makes 200 iterations, `1 + 200 * 4 + 1`: its
-/// points and result are those of 1feac89), and the paper's loop clamps its perturbed points
-/// onto the bounds (`paper seeded bounds`: a new point, and the start's evaluation). The
-/// other lines (the adaptive runs without bounds, which lose the start's evaluation from
-/// their last generation, and the paper loops of `Optimizer`) kept their bits.
+/// Results of the callback form, recorded when it was the only form and recorded again only
+/// where the behaviour was changed on purpose (CHANGELOG.md): every `minimize` run evaluates
+/// its start first (`paper`'s budget is 802, `1 + 200 * 4 + 1`, so that it makes 200
+/// iterations), and the paper's loop clamps its perturbed points onto the bounds.
 const PINNED: [&str; 30] = [
     "rosen s0: x=[3ff0000000130473, 3ff000000034fdec, 3ff0000000696d8d, 3ff0000000dd448d] fun=3c673502bd14c740 ev=3000 it=272 re=2 sigma=3fe24b957db23748 stop=Budget",
     "stairs-restart s0: x=[3fd86d4ed73caa81, 3fe7063d708eb3af, 4002a8db0749c850] fun=0 ev=2500 it=286 re=1 sigma=40eb8e0fa38d5525 stop=Budget",

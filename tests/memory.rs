@@ -1,5 +1,5 @@
-//! A long run of the paper's loop keeps its memory bounded (issue 29: `iterations=10**12`
-//! grew by 1.3 MB/s from the per-iteration history). Its own file, so that it runs in its own
+//! A long run of the paper's loop keeps its memory bounded (`iterations=10**12` must not grow
+//! with the per-iteration history). Its own file, so that it runs in its own
 //! process (the peak resident memory is the process's) and in parallel with the others.
 // Linux alone has `/proc/self/status`; CI runs on Linux, where a missing value fails the test.
 #![cfg(target_os = "linux")]

@@ -4,7 +4,7 @@ use std::cell::{Cell, RefCell};
 
 use plateau_free::{minimize, Error, Metric, Minimizer, Seeded, Stop, Strategy};
 
-/// The staircase: the squared distance of the rounded point to an integer target.
+/// A staircase: the squared distance of the rounded point to an integer target.
 fn staircase(target: &[f64]) -> impl Fn(&[f64]) -> f64 + '_ {
     move |x: &[f64]| {
         x.iter()
@@ -76,7 +76,7 @@ fn staircase_50d_is_solved_with_defaults() {
 
 #[test]
 fn the_papers_loop_is_one_option_away() {
-    // The settings that solve the 3-D staircase: N = 4, lr 0.05, sigma0 1, 400
+    // Settings that solve the 3-D staircase: N = 4, lr 0.05, sigma0 1, 400
     // iterations (1600 evaluations, plus one at the start and one at the final parameters).
     let target = [1.0, 2.0, 3.0];
     let f = staircase(&target);
@@ -139,9 +139,9 @@ fn sigma_grows_on_a_plateau() {
 
 /// An objective whose input is rounded to single precision, as a renderer's geometry is: below
 /// a spread of about 3e-8 its points tie. Such ties are the objective's resolution, not a
-/// plateau to cross: the run must end and restart (the CUP task sat 150 generations at spreads
-/// of 1e-8 to 1e-6 before this rule; with the plateau rule alone these seeds restart 0 or 1
-/// times in 800 evaluations, with it twice each).
+/// plateau to cross: the run must end and restart (without this rule it can sit for hundreds
+/// of generations at spreads of 1e-8 to 1e-6; with it these seeds restart twice each in 800
+/// evaluations).
 #[test]
 fn ties_at_the_objectives_resolution_end_the_run() {
     let f = |x: &[f64]| {

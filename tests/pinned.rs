@@ -1,16 +1,11 @@
 //! Pinned values: a fixed seed gives a known gradient, bit for bit. An accidental change of
 //! any random stream (the seeding, the order of draws, a sampler's arithmetic) fails here.
 //!
-//! The fingerprints were recorded from the estimator before its refactoring (commit
-//! 31edce8); the results pages in `docs/` were generated from the same streams. One change
-//! since, deliberate: the radial sampler sums the squares of its normals in eight
-//! interleaved lanes instead of in order (the in-order sum, a chain of `n` dependent
-//! additions, cost a third of the time of drawing the normals). The normals, the radii and
-//! the objective's seeds are unchanged; the norm, and so the radial offsets and weights,
-//! differ in the last bits when `n >= 8`. Cases 4 and 11 were re-recorded for that; every
-//! other case (all samplers at `n < 8`, per-coordinate, Gaussian, orthogonal) still has
-//! the bits of 31edce8. To print the current values (after a deliberate change of the
-//! streams, which must then be documented):
+//! The results pages in `docs/` were generated from the same streams. The radial sampler
+//! sums the squares of its normals in eight interleaved lanes (an in-order sum is a chain of
+//! `n` dependent additions), so its offsets and weights at `n >= 8` (cases 4 and 11) depend
+//! on that order in the last bits. To print the current values (after a deliberate change of
+//! the streams, which CHANGELOG.md must then record):
 //! `PLATEAU_FREE_PRINT_PINS=1 cargo test --release --test pinned -- --nocapture`.
 
 use plateau_free::{PlateauFreeGradient, Sampling, Seeded};
@@ -81,8 +76,7 @@ fn run(c: (Sampling, bool, bool, usize, usize, u64)) -> [u64; 5] {
     ]
 }
 
-/// Recorded at commit 31edce8 (before the refactoring of issue 10); cases 4 and 11 (radial,
-/// n >= 8) after the change of the radial norm's summation order (see the top of the file).
+/// The fingerprints of the twelve cases (the top of the file says how to print them).
 const PINS: [[u64; 5]; 12] = [
     [
         0x3fe0545f953bd175,

@@ -1,4 +1,4 @@
-//! What every method promises (issue 29), checked over random boxes, starts, seeds and small
+//! What every method promises, checked over random boxes, starts, seeds and small
 //! budgets, for every method: the paper's loop (`Optimizer` with `PlateauFreeGradient` and each
 //! sampler, finite differences, SPSA), `Minimizer` with the adaptive search, `Strategy::Paper`
 //! and the polished loop; each in its callback form and (where it has one) asked and told.
@@ -334,7 +334,7 @@ proptest! {
     }
 }
 
-/// The issue's case: in 10^4 dimensions, with 2000 evaluations, the adaptive search never
+/// The case: in 10^4 dimensions, with 2000 evaluations, the adaptive search never
 /// evaluated `x0` and returned 22,861 (24,510 here) where `f(x0)` = 20,000.
 #[test]
 fn the_start_counts_in_ten_thousand_dimensions() {

@@ -1,4 +1,4 @@
-//! A run's state is a value (issue 24 item 7): a `Minimizer`'s ask and tell, for every
+//! A run's state is a value: a `Minimizer`'s ask and tell, for every
 //! method, serialised with serde at any point (after a tell, between an ask and its tell),
 //! dropped and read back, goes on bit for bit as the uninterrupted run.
 #![cfg(feature = "serde")]

@@ -1,5 +1,5 @@
 """plateau_free.drjit.PlateauFreeOp: our gradient for some parameters and Dr.Jit's (Mitsuba's) for
-the others, in one backward pass; and python/examples/mitsuba_mixed.py, small.
+the others, in one backward pass; and studies/mitsuba/mixed.py, small.
 
 Needs drjit and mitsuba (scripts/install-mitsuba): skipped without them, a failure when
 PLATEAU_FREE_REQUIRE_MITSUBA=1 (as the test command sets it).
@@ -20,8 +20,7 @@ import pytest
 
 import plateau_free
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "python" / "examples"
-sys.path.insert(0, str(EXAMPLES))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository: `studies`
 
 HAVE_MITSUBA = importlib.util.find_spec("mitsuba") is not None
 REQUIRE = os.environ.get("PLATEAU_FREE_REQUIRE_MITSUBA") == "1"
@@ -33,7 +32,7 @@ pytestmark = pytest.mark.skipif(
 
 @pytest.fixture(scope="module")
 def mi() -> Iterator[Any]:
-    import mitsuba_scene as ms
+    from studies.mitsuba import _scene as ms
 
     yield ms.load_mitsuba()  # sets the variant and DRJIT_LIBLLVM_PATH
 
@@ -133,7 +132,7 @@ def test_bad_input_is_an_error_naming_it(mi: Any) -> None:
 
 
 def test_the_mixed_example_runs_small(tmp_path: Path, mi: Any) -> None:
-    import mitsuba_mixed
+    from studies.mitsuba import mixed as mitsuba_mixed
 
     s = mitsuba_mixed.main(["--out", str(tmp_path), "--iterations", "6", "--scale", "0.125", "--spp", "2"])
     assert s["perturbed_renders"] == 6 * 2

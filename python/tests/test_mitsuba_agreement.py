@@ -1,6 +1,6 @@
-"""Every task's scene renders alike in our renderer and in Mitsuba 3 (issue 23, item 2).
+"""Every task's scene renders alike in our renderer and in Mitsuba 3.
 
-python/examples/mitsuba_agreement.py at a low resolution and spp: for each task, at its
+studies/mitsuba/agreement.py at a low resolution and spp: for each task, at its
 target, ``pathtracer export`` gives the scene, ``pathtracer render`` our image (seed 0) and
 Mitsuba its images with seeds 0 and 1. The error (relative L1 difference of the 4x4-pixel block
 means, ours against Mitsuba seed 0) must stay within FACTOR times the noise floor (the same
@@ -27,8 +27,7 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
-EXAMPLES = REPO / "python" / "examples"
-sys.path.insert(0, str(EXAMPLES))
+sys.path.insert(0, str(REPO))  # `studies`
 
 HAVE_MITSUBA = importlib.util.find_spec("mitsuba") is not None
 REQUIRE = os.environ.get("PLATEAU_FREE_REQUIRE_MITSUBA") == "1"
@@ -45,14 +44,14 @@ FACTOR = 1.5  # error <= FACTOR x noise floor; the measured ratios are 0.67-1.20
 
 @pytest.fixture(scope="module")
 def mi():
-    from mitsuba_scene import load_mitsuba
+    from studies.mitsuba._scene import load_mitsuba
 
     return load_mitsuba()
 
 
 @pytest.fixture(scope="module")
 def binary():
-    import mitsuba_export
+    from studies.mitsuba import _export as mitsuba_export
 
     path = mitsuba_export.pathtracer_binary()
     assert os.access(path, os.X_OK), f"no pathtracer binary at {path}: run `cargo build --release -p pathtracer`"
@@ -62,7 +61,7 @@ def binary():
 @needs_mitsuba
 @pytest.mark.parametrize("task", TASKS)
 def test_our_render_agrees_with_mitsuba(mi, binary, task, tmp_path):
-    import mitsuba_agreement as ma
+    from studies.mitsuba import agreement as ma
 
     row = ma.compare(mi, task, "target", SPP, SCALE, workdir=tmp_path)
     assert 0.0 < row["noise_floor"] < 0.2, row["noise_floor"]
@@ -79,8 +78,8 @@ def test_a_drifting_scene_is_caught(mi, binary, task, tmp_path):
     # Mitsuba's scene with every light 10 % brighter: the same check must fail.
     import numpy as np
 
-    import mitsuba_agreement as ma
-    import mitsuba_export as mx
+    from studies.mitsuba import agreement as ma
+    from studies.mitsuba import _export as mx
 
     desc = mx.run_export(task, tmp_path, "target", spp=SPP, scale=SCALE)
     for s in desc["shapes"]:
@@ -99,7 +98,7 @@ def test_a_drifting_scene_is_caught(mi, binary, task, tmp_path):
 def test_block_error_is_the_relative_l1_of_block_means():
     import numpy as np
 
-    import mitsuba_agreement as ma
+    from studies.mitsuba import agreement as ma
 
     b = np.ones((8, 8, 3))
     a = b.copy()
@@ -117,7 +116,7 @@ def test_block_error_is_the_relative_l1_of_block_means():
 
 
 def test_quads_map_onto_mitsubas_rectangle():
-    import mitsuba_export as mx
+    from studies.mitsuba import _export as mx
 
     # TEXTURE's quad: corner (-1, 1, 0), u = 2 x, v = -2 y: centre 0, normal u x v = -z.
     m = mx.quad_to_world([-1.0, 1.0, 0.0], [2.0, 0.0, 0.0], [0.0, -2.0, 0.0])
@@ -125,7 +124,7 @@ def test_quads_map_onto_mitsubas_rectangle():
 
 
 def test_a_description_of_another_format_is_refused(tmp_path):
-    import mitsuba_export as mx
+    from studies.mitsuba import _export as mx
 
     (tmp_path / "scene.json").write_text('{"format": "something else"}')
     with pytest.raises(ValueError, match="pathtracer-scene 1"):
@@ -133,7 +132,7 @@ def test_a_description_of_another_format_is_refused(tmp_path):
 
 
 def test_overlapping_boxes_and_the_reordered_scene():
-    import mitsuba_agreement as ma
+    from studies.mitsuba import agreement as ma
 
     def box(x, material):
         return {"type": "box", "material": material,
@@ -158,9 +157,9 @@ def test_a_twin_moved_to_the_target_renders_the_target(mi, binary, task, tmp_pat
     # bit or within rounding, as the target's export loaded afresh.
     import numpy as np
 
-    import mitsuba_agreement as ma
-    import mitsuba_export as mx
-    import mitsuba_twin as mt
+    from studies.mitsuba import agreement as ma
+    from studies.mitsuba import _export as mx
+    from studies.mitsuba import _twin as mt
 
     twin = mt.Twin(mi, task, spp=4, scale=0.25)
     desc = mx.run_export(task, tmp_path, "target", spp=4, scale=0.25)

@@ -1,8 +1,8 @@
 """Mitsuba's chained gradient dL/dtheta agrees with a finite difference of Mitsuba's loss.
 
-python/examples/mitsuba_chain.py differentiates a task's image MSE with respect to the task's
+studies/mitsuba/_chain.py differentiates a task's image MSE with respect to the task's
 parameters theta as Mitsuba's derivative of the render times the exporter's d(scene)/dtheta
-(issue 23 item 4; the runs are python/examples/mitsuba_gradient.py). Here, on two smooth
+(the runs are studies/mitsuba/gradient.py). Here, on two smooth
 configurations at low resolution, the chained gradient is compared, seed by seed, with the
 central difference (step H) of the very loss Mitsuba renders with the same seed (common
 random numbers): GI's left-wall reflectance (a material, ``prb``) and OCCLUSION's depth with
@@ -36,7 +36,7 @@ import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "python" / "examples"))
+sys.path.insert(0, str(REPO))  # `studies`
 
 HAVE_MITSUBA = importlib.util.find_spec("mitsuba") is not None
 REQUIRE = os.environ.get("PLATEAU_FREE_REQUIRE_MITSUBA") == "1"
@@ -59,7 +59,7 @@ CASES = {
 
 @pytest.fixture(scope="module")
 def mi():
-    from mitsuba_scene import load_mitsuba
+    from studies.mitsuba._scene import load_mitsuba
 
     m = load_mitsuba()
     m.set_log_level(m.LogLevel.Error)
@@ -68,7 +68,7 @@ def mi():
 
 def measure(mi, case: str, jac_scale: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(mean AD, mean FD, standard error of AD - FD) over SEEDS seeds."""
-    import mitsuba_chain as mc
+    from studies.mitsuba import _chain as mc
 
     task, integrator, scale, spp, theta, idx = CASES[case]
     theta = np.array(theta)
@@ -118,7 +118,7 @@ def test_a_broken_chain_rule_is_caught(results, case, broken):
 @pytest.mark.parametrize("task,theta", [("cup", [0.4]), ("gi", [0.2, 0.8, 0.2, 0.5, 0.8, 0.7]),
                                         ("caustic", [0.5, 0.9])])
 def test_exporter_jacobian_is_in_its_flat_error_range(task, theta):
-    import mitsuba_chain as mc
+    from studies.mitsuba import _chain as mc
 
     # J(step) against J(step / 2): rounding (f32 scene numbers) grows as the step shrinks,
     # curvature (CUP's and GI's rotations) as it grows; at STEP both are far below 1 %.

@@ -1,4 +1,4 @@
-"""Tasks on Mitsuba 3 (python/examples/mitsuba_optimize.py): SHADOW's short runs, the scene, the
+"""Tasks on Mitsuba 3 (studies/mitsuba/optimize.py): SHADOW's short runs, the scene, the
 hints; another task (CUP) on its twin through the same command.
 
 Needs mitsuba in the interpreter that runs pytest: `scripts/install-mitsuba VENV` installs it.
@@ -22,9 +22,9 @@ import pytest
 import plateau_free
 
 REPO = Path(__file__).resolve().parents[2]
-EXAMPLES = REPO / "python" / "examples"
-EXAMPLE = EXAMPLES / "mitsuba_optimize.py"
-sys.path.insert(0, str(EXAMPLES))
+# The study runs from the repository as `python -m studies mitsuba-optimize`.
+STUDY = ["-m", "studies", "mitsuba-optimize"]
+sys.path.insert(0, str(REPO))
 
 HAVE_MITSUBA = importlib.util.find_spec("mitsuba") is not None
 REQUIRE = os.environ.get("PLATEAU_FREE_REQUIRE_MITSUBA") == "1"
@@ -38,9 +38,9 @@ needs_mitsuba = pytest.mark.skipif(
 def test_without_mitsuba_the_example_says_how_to_install_it():
     code = (
         "import sys, runpy; sys.modules['mitsuba'] = None; "
-        f"sys.argv = ['mitsuba_optimize.py', '--out', 'unused']; runpy.run_path({str(EXAMPLE)!r}, run_name='__main__')"
+        "sys.argv = ['studies', 'mitsuba-optimize', '--out', 'unused']; runpy.run_module('studies', run_name='__main__')"
     )
-    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=REPO)
     assert p.returncode != 0
     lines = [line for line in p.stderr.strip().splitlines() if line.strip()]
     assert len(lines) == 1, p.stderr
@@ -51,7 +51,7 @@ def test_without_plateau_free_the_example_says_how_to_install_it():
     # The example runs the package itself (no stand-in): without it, one line saying how to get it.
     code = (
         "import sys, runpy; sys.modules['plateau_free'] = None; "
-        f"sys.argv = ['mitsuba_optimize.py', '--out', 'unused']; runpy.run_path({str(EXAMPLE)!r}, run_name='__main__')"
+        "sys.argv = ['studies', 'mitsuba-optimize', '--out', 'unused']; runpy.run_module('studies', run_name='__main__')"
     )
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=REPO)
     assert p.returncode != 0
@@ -62,7 +62,7 @@ def test_without_plateau_free_the_example_says_how_to_install_it():
 
 @needs_mitsuba
 def test_scene_is_the_task_and_renders_deterministically_per_seed():
-    import mitsuba_scene as ms
+    from studies.mitsuba import _scene as ms
 
     mi = ms.load_mitsuba()
     scene = ms.ShadowScene(mi, spp=8, scale=0.25)
@@ -84,7 +84,7 @@ def short_search_run(tmp_path: Path, method: str) -> tuple[dict, list[dict]]:
     """A short `--method adaptive|polished` run (2 x 15 = 30 renders at 32x24, seed 4): checks the
     files and the summary's finite numbers; returns the summary and the history's rows."""
     out = tmp_path / method
-    cmd = [sys.executable, str(EXAMPLE), "--method", method, "--out", str(out), "--iterations", "15",
+    cmd = [sys.executable, *STUDY, "--method", method, "--out", str(out), "--iterations", "15",
            "--scale", "0.125", "--spp", "8", "--eval-every", "2", "--seed", "4", "--progress", "0"]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=REPO)
     assert p.returncode == 0, p.stderr[-3000:]
@@ -113,7 +113,7 @@ def assert_returns_its_best_render(s: dict, rows: list[dict]) -> None:
 @needs_mitsuba
 def test_short_run_writes_everything(tmp_path):
     out = tmp_path / "run"
-    cmd = [sys.executable, str(EXAMPLE), "--method", "plateau", "--out", str(out), "--iterations", "4",
+    cmd = [sys.executable, *STUDY, "--method", "plateau", "--out", str(out), "--iterations", "4",
            "--scale", "0.125", "--ad-iterations", "1", "--eval-every", "2", "--seed", "3"]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=REPO)
     assert p.returncode == 0, p.stderr[-3000:]
@@ -176,7 +176,7 @@ def test_short_polished_run_is_the_loop_then_the_adaptive_search(tmp_path):
 
 def test_polish_is_an_option_of_method_polished(tmp_path):
     for extra in (["--method", "adaptive", "--polish", "0.5"], ["--method", "polished", "--polish", "1"]):
-        p = subprocess.run([sys.executable, str(EXAMPLE), *extra, "--out", str(tmp_path / "x")],
+        p = subprocess.run([sys.executable, *STUDY, *extra, "--out", str(tmp_path / "x")],
                            capture_output=True, text=True, timeout=300, cwd=REPO)
         assert p.returncode == 2 and "--polish" in p.stderr, p.stderr
     assert not (tmp_path / "x").exists()
@@ -186,7 +186,7 @@ def test_a_folder_holds_one_methods_runs(tmp_path):
     out = tmp_path / "study"
     (out / "seed-0").mkdir(parents=True)
     (out / "seed-0" / "summary.json").write_text(json.dumps({"seed": 0, "param_mse": 1.0}))  # a paper-loop run
-    p = subprocess.run([sys.executable, str(EXAMPLE), "--method", "adaptive", "--seeds", "1", "--out", str(out)],
+    p = subprocess.run([sys.executable, *STUDY, "--method", "adaptive", "--seeds", "1", "--out", str(out)],
                        capture_output=True, text=True, timeout=300, cwd=REPO)
     assert p.returncode != 0
     assert "not 'adaptive'" in p.stderr and "own --out" in p.stderr
@@ -214,7 +214,7 @@ def test_adaptive_page_compares_per_seed_and_names_seeds_not_run(tmp_path, metho
         (d / "summary.json").write_text(json.dumps({"seed": s, "param_mse": pm, "seconds_per_iteration": 4.8,
                                                     "samples": 2}))
     page = tmp_path / "page.md"
-    p = subprocess.run([sys.executable, str(EXAMPLE), "--method", method, "--seeds", "3", "--page-only",
+    p = subprocess.run([sys.executable, *STUDY, "--method", method, "--seeds", "3", "--page-only",
                         "--out", str(out), "--plateau-runs", str(paper), "--page", str(page)],
                        capture_output=True, text=True, timeout=300, cwd=REPO)
     assert p.returncode == 0, p.stderr[-3000:]
@@ -242,7 +242,7 @@ def test_any_task_runs_with_the_default_method_on_its_twin(tmp_path):
     # --task cup: the tasks' default method (polished) on CUP's twin at 1/8 resolution and 2 %
     # of the paper's budget (16 renders): its JSON, final and target images; a second call keeps it.
     out = tmp_path / "cup"
-    cmd = [sys.executable, str(EXAMPLE), "--task", "cup", "--scale", "0.125", "--budget-scale", "0.02",
+    cmd = [sys.executable, *STUDY, "--task", "cup", "--scale", "0.125", "--budget-scale", "0.02",
            "--seed", "1", "--out", str(out)]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=600, cwd=REPO)
     assert p.returncode == 0, p.stderr[-3000:]
@@ -259,13 +259,13 @@ def test_any_task_runs_with_the_default_method_on_its_twin(tmp_path):
                                          (["--budget-scale", "0"], "--budget-scale"),
                                          (["--scale", "-1"], "--scale")])
 def test_shadow_only_and_bad_options_of_another_task_are_errors(tmp_path, extra, name):
-    p = subprocess.run([sys.executable, str(EXAMPLE), "--task", "gi", *extra, "--out", str(tmp_path / "x")],
+    p = subprocess.run([sys.executable, *STUDY, "--task", "gi", *extra, "--out", str(tmp_path / "x")],
                        capture_output=True, text=True, timeout=300, cwd=REPO)
     assert p.returncode == 2 and name in p.stderr, p.stderr
     assert not (tmp_path / "x").exists()
 
 
 def test_budget_scale_is_not_an_option_of_shadow(tmp_path):
-    p = subprocess.run([sys.executable, str(EXAMPLE), "--budget-scale", "0.5", "--out", str(tmp_path / "x")],
+    p = subprocess.run([sys.executable, *STUDY, "--budget-scale", "0.5", "--out", str(tmp_path / "x")],
                        capture_output=True, text=True, timeout=300, cwd=REPO)
     assert p.returncode == 2 and "--budget-scale" in p.stderr, p.stderr

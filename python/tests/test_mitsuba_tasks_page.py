@@ -1,4 +1,4 @@
-"""The every-task page (python/examples/mitsuba_tasks_page.py) from small fake results.
+"""The every-task page (studies/mitsuba/tasks_page.py) from small fake results.
 
 No mitsuba and no renderer: the page reads committed runs only, and the paper's numbers are
 given here as `pathtracer export` would state them.
@@ -14,9 +14,9 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "python" / "examples"))
+sys.path.insert(0, str(REPO))  # `studies`
 
-import mitsuba_tasks_page as tp  # noqa: E402
+from studies.mitsuba import tasks_page as tp  # noqa: E402
 
 PAPER = {"cup": {"image_mse": 4.92e-6, "param_mse": 4.18e-7, "seconds_per_iteration": 0.1,
                  "mitsuba_image_mse": 5.49e-3, "mitsuba_param_mse": 7.5e-2}}
