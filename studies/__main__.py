@@ -7,11 +7,12 @@ the interpreter that has what the study needs (most: ``target/venv``, made by
 
 from __future__ import annotations
 
+import argparse
 import runpy
 import sys
 
 # name: (module, what it does). A study's module runs as ``__main__`` with ARGS as its
-# arguments, so ``python -m studies NAME --help`` shows its options.
+# arguments, so ``python -m studies NAME --help`` shows its options (``run``).
 STUDIES: dict[str, tuple[str, str]] = {
     "mitsuba-optimize": ("studies.mitsuba.optimize",
                          "any task on Mitsuba 3 with the Python package; SHADOW against Mitsuba's "
@@ -70,9 +71,30 @@ def main(argv: list[str]) -> int:
     if name not in STUDIES:
         print(f"unknown study {name!r}\n\n{listing()}", file=sys.stderr)
         return 2
-    sys.argv = [name, *rest]  # runpy puts the module's file in sys.argv[0]
-    runpy.run_module(STUDIES[name][0], run_name="__main__", alter_sys=True)
+    run(STUDIES[name][0], f"python -m studies {name}", rest)
     return 0
+
+
+def run(module: str, prog: str, args: list[str]) -> None:
+    """Run ``module`` as ``__main__`` with ``args``, its argument parsers named ``prog``.
+
+    runpy puts the module's file in ``sys.argv[0]``, which argparse would show as the program
+    (``usage: optimize.py``); a study's parsers are made while it runs, so for that time a
+    parser given no name takes ``prog``, the command that runs the study.
+    """
+    init = argparse.ArgumentParser.__init__
+
+    def named(self: argparse.ArgumentParser, *a: object, **k: object) -> None:
+        if not a:  # the first positional argument is prog
+            k.setdefault("prog", prog)
+        init(self, *a, **k)
+
+    sys.argv = [prog, *args]
+    argparse.ArgumentParser.__init__ = named  # type: ignore[method-assign]
+    try:
+        runpy.run_module(module, run_name="__main__", alter_sys=True)
+    finally:
+        argparse.ArgumentParser.__init__ = init  # type: ignore[method-assign]
 
 
 if __name__ == "__main__":
