@@ -227,13 +227,13 @@ def tried_table(default: list[Row], tried: dict[str, list[Row]]) -> list[str]:
     return lines
 
 
-def bbob_before_after(before: list[Row], after: dict[str, list[Row]]) -> list[str]:
-    """``minimize`` on bbob-largescale as it is (``before``) and with each variant tried
-    (``after``, by label), where all ran."""
-    b = {(int(r["n"]), int(r["function"])): r for r in before if r["method"] == "minimize"}
+def bbob_variants(default: list[Row], variants: dict[str, list[Row]]) -> list[str]:
+    """``minimize`` on bbob-largescale with its default rule (``default``) and with each variant
+    tried (``variants``, by label), where all ran."""
+    b = {(int(r["n"]), int(r["function"])): r for r in default if r["method"] == "minimize"}
     a = {
         label: {(int(r["n"]), int(r["function"])): r for r in rows if r["method"] == "minimize"}
-        for label, rows in after.items()
+        for label, rows in variants.items()
     }
     keys = sorted(k for k in b if any(k in v for v in a.values()))
     if not keys:
@@ -287,10 +287,10 @@ def seeds_table(rows: list[Row]) -> list[str]:
 
 
 SEED_LABELS = {
-    "csa": "CSA alone (the default before the warm-up)",
+    "csa": "CSA alone, no warm-up",
     "tpa": "two-point step-size adaptation",
     "guard": "TPA only where CSA agrees",
-    "warm": "TPA warm-up, then CSA (the default before)",
+    "warm": "TPA warm-up, then CSA, no step back",
     "start": "TPA warm-up, back to the start if it beat nothing, then CSA (default)",
     "nocov": "warm-up; the two points out of the covariance update",
     "rates": "warm-up; the two points out of the covariance update; sep-CMA-ES's rates",
@@ -390,8 +390,8 @@ def main() -> None:
     table, missing = texture_table(rows)
     template = open(os.path.join(os.path.dirname(__file__), "page.md")).read()
     tried = {
-        "TPA warm-up, then CSA (the default before)": read(glob.glob(os.path.join(out, "tried-warm-texture*.csv"))),
-        "CSA alone (the default before the warm-up)": read(glob.glob(os.path.join(out, "tried-csa-texture*.csv"))),
+        "TPA warm-up, then CSA, no step back": read(glob.glob(os.path.join(out, "tried-warm-texture*.csv"))),
+        "CSA alone, no warm-up": read(glob.glob(os.path.join(out, "tried-csa-texture*.csv"))),
         "median success rule": read(glob.glob(os.path.join(out, "tried-msr-texture*.csv"))),
         "median success rule and sep-CMA-ES's rates": read(glob.glob(os.path.join(out, "tried-msr-rates-texture*.csv"))),
         "two-point step-size adaptation (TPA)": read(glob.glob(os.path.join(out, "tried-tpa-texture*.csv"))),
@@ -401,8 +401,8 @@ def main() -> None:
     }
     tried = {k: v for k, v in tried.items() if v}
     tried_bbob = {
-        "TPA warm-up, then CSA (before)": read(sorted(glob.glob(os.path.join(out, "tried-warm-bbob*.csv")))),
-        "CSA alone (before the warm-up)": read(sorted(glob.glob(os.path.join(out, "tried-csa-bbob*.csv")))),
+        "TPA warm-up, then CSA, no step back": read(sorted(glob.glob(os.path.join(out, "tried-warm-bbob*.csv")))),
+        "CSA alone, no warm-up": read(sorted(glob.glob(os.path.join(out, "tried-csa-bbob*.csv")))),
         "median success rule": read(sorted(glob.glob(os.path.join(out, "tried-msr-bbob*.csv")))),
         "TPA": read(sorted(glob.glob(os.path.join(out, "tried-tpa-bbob*.csv")))),
         "the warm-up without the two points after it": read(sorted(glob.glob(os.path.join(out, "tried-nopair-bbob*.csv")))),
@@ -415,7 +415,7 @@ def main() -> None:
         command=command,
         time_scales="\n".join(time_scales()),
         tried="\n".join(tried_table(rows, tried)) if tried else "(no variant ran)",
-        bbob_tried="\n".join(bbob_before_after(bbob, tried_bbob)),
+        bbob_tried="\n".join(bbob_variants(bbob, tried_bbob)),
         bbob_seeds="\n".join(seeds_table(seeds)) if seeds else "(not run)",
         overhead="\n".join(overhead(read([overhead_path]) if os.path.exists(overhead_path) else [])),
         table="\n".join(table),
