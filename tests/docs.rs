@@ -3,6 +3,8 @@
 //! - every figure the README and the docs quote from a results page is on that page (a
 //!   paragraph after `<!-- figures: docs/results/PAGE.md -->` quotes PAGE; each of its numbers
 //!   must appear there);
+//! - a paragraph that quotes a measured figure has such a marker (`measured`, below, says what
+//!   reads as measured), so that no figure escapes the first check;
 //! - every link of a page points to a file;
 //! - `docs/design.md` names every source file of the library, the Python package and the path
 //!   tracer, read from the tree when the test runs;
@@ -37,6 +39,19 @@ fn read(path: &Path) -> String {
 /// is a name, not a figure.
 fn numbers(text: &str, bare: bool) -> Vec<String> {
     let c: Vec<char> = text.chars().collect();
+    number_spans(&c)
+        .into_iter()
+        .filter(|(start, _, _)| {
+            let glued = *start > 0 && (c[start - 1].is_alphabetic() || c[start - 1] == '_');
+            !(bare && glued)
+        })
+        .map(|(_, _, n)| n)
+        .collect()
+}
+
+/// Every number of `c`: where it starts and ends, and its digits (thousands' commas out, a
+/// fraction and an exponent kept).
+fn number_spans(c: &[char]) -> Vec<(usize, usize, String)> {
     let mut out = Vec::new();
     let mut i = 0;
     while i < c.len() {
@@ -46,7 +61,7 @@ fn numbers(text: &str, bare: bool) -> Vec<String> {
             i += 1;
             continue;
         }
-        let glued = i > 0 && (c[i - 1].is_alphabetic() || c[i - 1] == '_');
+        let start = i;
         let mut s = String::new();
         let digits = |i: &mut usize, s: &mut String| {
             while *i < c.len() && c[*i].is_ascii_digit() {
@@ -78,9 +93,7 @@ fn numbers(text: &str, bare: bool) -> Vec<String> {
                 digits(&mut i, &mut s);
             }
         }
-        if !(bare && glued) {
-            out.push(s);
-        }
+        out.push((start, i, s));
     }
     out
 }
@@ -199,6 +212,121 @@ fn quoted_figures_match_their_pages() {
         wrong.is_empty(),
         "figures that are not on the page they quote:\n{}",
         wrong.join("\n")
+    );
+}
+
+/// The docs pages that are results pages themselves, written whole by a command (their
+/// figures are that command's): their paragraphs need no marker.
+const GENERATED: &[&str] = &["docs/estimators.md"];
+
+/// Figures that read as measured but are settings or facts of the code, by file: the
+/// figure as `measured` prints it.
+const CONSTANTS: &[(&str, &str)] = &[];
+
+/// Units after a number with a fractional part that make it a measurement: times and sizes.
+const UNITS: &[&str] = &[
+    "s", "ms", "us", "µs", "μs", "ns", "min", "h", "GB", "MB", "kB", "KB",
+];
+
+/// Words after `N times` (or `Nx`) that make it a measured ratio.
+const COMPARED: &[&str] = &[
+    "faster", "slower", "fewer", "more", "less", "cheaper", "lower", "higher", "smaller", "larger",
+];
+
+/// The figures of `text` (inline code and link targets already out: `prose`) that read as
+/// measured: a number with a fractional part followed by a unit of time or size (`1.61 s`,
+/// `0.8 MB`) or by `%` (`0.7 %`); a ratio glued to `x` (`0.54x`, `27x`); scientific notation
+/// with a fractional mantissa (`2.79e-2`: a setting is written `1e-3`); a number followed by
+/// `times` or `x` and a comparison (`40 times smaller`). Settings are written round, results
+/// are not: the rule leaves out `sigma0 = 0.5`, `a 90 s cap`, `1e-8` and `5 %` (a tolerance),
+/// and `CONSTANTS` lists what it still takes for a measurement.
+fn measured(text: &str) -> Vec<String> {
+    let c: Vec<char> = text.chars().collect();
+    let word = |from: usize| -> (String, usize) {
+        let mut i = from;
+        while i < c.len() && c[i] == ' ' {
+            i += 1;
+        }
+        let start = i;
+        while i < c.len() && (c[i].is_alphabetic() || c[i] == '%') {
+            i += 1;
+            if c[i - 1] == '%' {
+                break;
+            }
+        }
+        if c.get(i).is_some_and(|d| d.is_alphanumeric()) {
+            return (String::new(), from); // `s2`: a name, not a unit
+        }
+        (c[start..i].iter().collect(), i)
+    };
+    let mut out = Vec::new();
+    for (start, end, n) in number_spans(&c) {
+        let mantissa = n.split('e').next().unwrap_or("");
+        let fraction = mantissa.contains('.');
+        let (unit, after) = word(end);
+        let glued_x = c.get(end).is_some_and(|x| matches!(x, 'x' | '×'))
+            && c.get(end + 1).is_none_or(|d| !d.is_alphanumeric());
+        let (than, past) = word(after);
+        let upto = if glued_x {
+            Some(end + 1)
+        } else if matches!(unit.as_str(), "times" | "x" | "×") && COMPARED.contains(&than.as_str())
+        {
+            Some(past)
+        } else if fraction && (UNITS.contains(&unit.as_str()) || unit == "%") {
+            Some(after)
+        } else if fraction && n.contains('e') {
+            Some(end)
+        } else {
+            None
+        };
+        if let Some(upto) = upto {
+            out.push(c[start..upto].iter().collect());
+        }
+    }
+    out
+}
+
+#[test]
+fn measured_figures_name_their_page() {
+    let Some(root) = repo() else { return };
+    let mut unmarked = Vec::new();
+    for file in quoting_files(&root) {
+        let name = file
+            .strip_prefix(&root)
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        if GENERATED.contains(&name.as_str()) {
+            continue;
+        }
+        let text = read(&file);
+        let mut marked = false;
+        let mut paragraph: Vec<&str> = Vec::new();
+        let mut first = 0;
+        for (at, line) in text.lines().chain([""]).enumerate() {
+            if !line.trim().is_empty() && !line.trim().starts_with("<!-- figures: ") {
+                if paragraph.is_empty() {
+                    first = at + 1;
+                }
+                paragraph.push(line);
+                continue;
+            }
+            if !marked {
+                for figure in measured(&prose(&paragraph.join("\n"))) {
+                    if !CONSTANTS.contains(&(name.as_str(), figure.as_str())) {
+                        unmarked.push(format!("{name} (line {first}): {figure}"));
+                    }
+                }
+            }
+            marked = line.trim().starts_with("<!-- figures: ");
+            paragraph.clear();
+        }
+    }
+    assert!(
+        unmarked.is_empty(),
+        "measured figures in paragraphs without a `<!-- figures: PAGE -->` marker (tie them to \
+         their results page, or link the page instead; a setting goes in CONSTANTS):\n{}",
+        unmarked.join("\n")
     );
 }
 
@@ -436,4 +564,16 @@ fn the_number_reader_reads_figures_as_pages_print_them() {
         prose("`--samples 32` and [page](results/fig1.md) 5"),
         " and [page] 5"
     );
+    assert_eq!(
+        measured("1.61 s, 0.7 %, 0.54x, 27x and 2.79e-2; 40 times smaller"),
+        [
+            "1.61 s",
+            "0.7 %",
+            "0.54x",
+            "27x",
+            "2.79e-2",
+            "40 times smaller"
+        ]
+    );
+    assert!(measured("sigma0 = 0.5, a 90 s cap, 1e-8, 5 %, 64x48, 0.7 x 0.6, 1.5 s2").is_empty());
 }
