@@ -228,7 +228,7 @@ const CONSTANTS: &[(&str, &str)] = &[];
 /// repository.
 const PAPER: &[&str] = &[
     "4.18e-7", "4.92e-6", "1.81e-3", "1.74e-5", "3.29e-3", "9.76e-5", "8.71e-4", "3.81e-3",
-    "4.19e-1", "2.8e-3",
+    "4.19e-1", "2.34e-4", "1.89e-5", "5.07e-5", "2.8e-3",
 ];
 
 /// Units after a number with a fractional part that make it a measurement: times and sizes.
