@@ -51,7 +51,9 @@ STUDIES: dict[str, tuple[str, str]] = {
     "drjit-overhead": ("studies.overhead.drjit",
                        "plateau_free.drjit.PlateauFreeOp's cost per backward pass (docs/integrations.md)"),
     "ray-scaling": ("studies.overhead.ray_scaling",
-                    "RayEvaluator's speed-up against its workers (docs/scale-out.md)"),
+                    "RayEvaluator's speed-up against its workers (docs/results/ray-scaling.md)"),
+    "mpi-scaling": ("studies.overhead.mpi_scaling",
+                    "plateau-free-mpi's speed-up and overhead (docs/results/mpi-scaling.md)"),
 }
 
 

@@ -2,6 +2,7 @@
 
     python -m studies ray-scaling            # after pip install "./python[ray]"
     python -m studies ray-scaling --cost 0.1 --samples 32 --workers 1 2 4 8
+    python -m studies ray-scaling --page docs/results/ray-scaling.md
 
 Starts a local Ray instance (``--address`` joins a running cluster instead) and prints:
 
@@ -20,13 +21,18 @@ Starts a local Ray instance (``--address`` joins a running cluster instead) and 
    per-task overhead o (the zero-cost run with K = 2), the latency L (the scaling run's wall time
    beyond the ideal, median over K) and B measured here, extrapolated to ``--machines`` machines
    with ``--network-mbps`` between them (assumed: it cannot be measured on one machine).
+
+With ``--page PATH`` the same output is also written as a results page (``studies/_page.py``).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import math
 import os
+import sys
 import time
 
 import numpy as np
@@ -37,6 +43,8 @@ import ray  # noqa: E402
 
 import plateau_free  # noqa: E402
 from plateau_free.ray import RayEvaluator  # noqa: E402
+
+from studies import _page  # noqa: E402
 
 
 def make_objective(cost: float, busy: bool):
@@ -186,8 +194,43 @@ def main() -> None:
     parser.add_argument("--address", default=None, help="a running Ray cluster's address (default: a local instance)")
     parser.add_argument("--skip-scaling", action="store_true")
     parser.add_argument("--skip-overhead", action="store_true")
+    parser.add_argument("--page", default=None, help="also write the output as this results page")
     args = parser.parse_args()
+    if args.page is None:
+        measure(args)
+        return
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(_Tee(sys.stdout, printed)):
+        measure(args)
+    command = " ".join(["python -m studies ray-scaling", *sys.argv[1:]])
+    _page.write(args.page, PAGE.format(command=command, output=printed.getvalue().rstrip()))
 
+
+PAGE = """# Ray: speed-up and overhead of `RayEvaluator`
+
+Made by `{command}` (after `pip install "./python[ray]"`), on a machine shared with other
+jobs: compare within a table. What each part measures, and the cost model fitted to it:
+[`docs/scale-out.md`](../scale-out.md#measured-speed-up-and-overhead).
+
+```text
+{output}
+```"""
+
+
+class _Tee(io.TextIOBase):
+    """Writes to every stream it holds: the terminal and the page's copy."""
+
+    def __init__(self, *streams: io.TextIOBase) -> None:
+        self.streams = streams
+
+    def write(self, text: str) -> int:
+        for stream in self.streams:
+            stream.write(text)
+        return len(text)
+
+
+def measure(args: argparse.Namespace) -> None:
+    """Starts Ray, prints the scaling, the overhead and the cost model, stops Ray."""
     start = time.perf_counter()
     if args.address is None:
         # Logical CPUs: as many as the largest K, so that every actor gets one. A sleeping
