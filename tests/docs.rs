@@ -301,6 +301,11 @@ fn measured(text: &str) -> Vec<String> {
     out
 }
 
+/// Every paragraph of the README and `docs/*.md` (but the `GENERATED` pages) that quotes a
+/// figure `measured` finds follows a `<!-- figures: PAGE -->` marker, whose page the first
+/// test then holds it to; the paper's figures (`PAPER`) and the settings in `CONSTANTS` need
+/// none. Inline code and fenced blocks (commands, code, a program's sample output) are not
+/// prose here (`prose`).
 #[test]
 fn measured_figures_name_their_page() {
     let Some(root) = repo() else { return };
