@@ -11,6 +11,7 @@ mod budget;
 pub mod checkpoint;
 mod image;
 pub mod interrupt;
+mod meter;
 mod outcome;
 mod outputs;
 mod recount;
@@ -22,7 +23,6 @@ use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use indicatif::{ProgressBar, ProgressStyle};
 use plateau_free::baseline::{FiniteDifference, Spsa};
 use plateau_free::{
     Adam, Annealer, GradientEstimator, Optimizer, OptimizerState, PlateauFreeGradient, Seeded, Step,
@@ -32,11 +32,13 @@ pub use budget::{plan_for_budget, plan_with_render_time};
 pub use checkpoint::{Build, Checkpoint, CheckpointError, Every, Progress};
 pub use outcome::{renders_to, write_history, Outcome, Row, Summary};
 pub use recount::{loop_renders, recount};
+pub use meter::{LINE_SECONDS, LINE_SECONDS_VAR};
 pub use settings::{
     eval_every, Crn, Method, Settings, CURVE_POINTS, MAX_SAMPLES, MAX_SCALE, POLISH, POLISH_BEFORE,
 };
 pub use stall_replay::{replay as replay_stall, Replayed};
 
+use self::meter::{At, Meter, Unit};
 use crate::render::Image;
 use crate::report::Result;
 use crate::tasks::Task;
@@ -493,7 +495,7 @@ struct Recorder<'a> {
     history: Vec<Row>,
     optimisation_time: Duration,
     last: Instant,
-    bar: ProgressBar,
+    bar: Meter,
     /// The iteration count at which the next checkpoint is due.
     checkpoint_at: Option<usize>,
     /// Why the observer last stopped the loop.
@@ -524,7 +526,7 @@ impl<'a> Recorder<'a> {
             // Not `iterations` rows ahead: a count near `usize::MAX` cannot be allocated.
             history: Vec::with_capacity(s.iterations.min(1 << 16)),
             optimisation_time: Duration::ZERO,
-            bar: progress_bar(task.name(), s.iterations, show_progress),
+            bar: Meter::new(task.name(), s.iterations, Unit::Iterations, show_progress),
             last: Instant::now(),
             checkpoint_at: None,
             why: None,
@@ -537,7 +539,7 @@ impl<'a> Recorder<'a> {
         self.history.clone_from(&c.history);
         self.snapshots.clone_from(&c.snapshots);
         self.optimisation_time = Duration::from_secs_f64(c.optimisation_seconds);
-        self.bar.set_position(c.history.len() as u64);
+        self.bar.set_position(c.history.len());
     }
 
     /// Starts timing again (after a checkpoint was written: its time is not the run's).
@@ -575,11 +577,14 @@ impl<'a> Recorder<'a> {
             eval_renders: eval_renders + usize::from(image_mse.is_some()),
             seconds,
         });
-        self.bar.set_message(format!(
-            "loss {:.3e}  sigma {:.3}",
-            step.estimate.mean_value, step.sigma
-        ));
-        self.bar.inc(1);
+        self.bar.update(
+            At {
+                iterations: step.iteration + 1,
+                renders: self.renders.get(),
+                loss: step.estimate.mean_value,
+            },
+            format!("loss {:.3e}  sigma {:.3}", step.estimate.mean_value, step.sigma),
+        );
         let over_budget = s.budget_seconds.is_some_and(|b| seconds >= b);
         let checkpoint_due = self.checkpoint_at.is_some_and(|k| step.iteration + 1 >= k);
         self.last = Instant::now();
@@ -593,7 +598,7 @@ impl<'a> Recorder<'a> {
 
     /// The history, the snapshots and the optimisation time.
     fn finish(self) -> (Vec<Row>, Vec<Vec<f64>>, Duration) {
-        self.bar.finish_and_clear();
+        self.bar.finish();
         (self.history, self.snapshots, self.optimisation_time)
     }
 }
@@ -675,21 +680,6 @@ struct Ended {
     renders: usize,
     stopped_early: bool,
     interrupted: bool,
-}
-
-/// The progress bar of a run (hidden unless `show`).
-fn progress_bar(name: &str, iterations: usize, show: bool) -> ProgressBar {
-    if !show {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(iterations as u64);
-    let style = ProgressStyle::with_template(
-        "{prefix:>10} [{elapsed_precise}] {bar:32} {pos}/{len} {msg} (ETA {eta})",
-    )
-    .unwrap_or_else(|_| ProgressStyle::default_bar());
-    bar.set_style(style);
-    bar.set_prefix(name.to_string());
-    bar
 }
 
 #[cfg(test)]
