@@ -382,8 +382,14 @@ mod tests {
             return;
         }
         let (w, h, top, right) = longest_dark_lines(&path);
-        assert!(top > w / 2, "no frame along the top: longest line {top} of {w}");
-        assert!(right > h / 2, "no frame along the right: longest line {right} of {h}");
+        assert!(
+            top > w / 2,
+            "no frame along the top: longest line {top} of {w}"
+        );
+        assert!(
+            right > h / 2,
+            "no frame along the right: longest line {right} of {h}"
+        );
         for (x, y) in [("", "MSE"), ("iteration", " ")] {
             let refused = plot(&path, &Axes::log_y("t", x, y), &series).unwrap_err();
             assert!(refused.to_string().contains("label"), "{refused}");

@@ -157,8 +157,8 @@ fn bar(name: &str, total: usize, unit: Unit) -> ProgressBar {
         "{{prefix:>10}} [{{elapsed_precise}}] {{bar:32}} {{pos}}/{{len}} {} {{msg}} (ETA {{eta}})",
         unit.name()
     );
-    let style = ProgressStyle::with_template(&template)
-        .unwrap_or_else(|_| ProgressStyle::default_bar());
+    let style =
+        ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar());
     bar.set_style(style);
     bar.set_prefix(name.to_string());
     bar

@@ -30,9 +30,9 @@ use plateau_free::{
 
 pub use budget::{plan_for_budget, plan_with_render_time};
 pub use checkpoint::{Build, Checkpoint, CheckpointError, Every, Progress};
+pub use meter::{LINE_SECONDS, LINE_SECONDS_VAR};
 pub use outcome::{renders_to, write_history, Outcome, Row, Summary};
 pub use recount::{loop_renders, recount};
-pub use meter::{LINE_SECONDS, LINE_SECONDS_VAR};
 pub use settings::{
     eval_every, Crn, Method, Settings, CURVE_POINTS, MAX_SAMPLES, MAX_SCALE, POLISH, POLISH_BEFORE,
 };
@@ -583,7 +583,10 @@ impl<'a> Recorder<'a> {
                 renders: self.renders.get(),
                 loss: step.estimate.mean_value,
             },
-            format!("loss {:.3e}  sigma {:.3}", step.estimate.mean_value, step.sigma),
+            format!(
+                "loss {:.3e}  sigma {:.3}",
+                step.estimate.mean_value, step.sigma
+            ),
         );
         let over_budget = s.budget_seconds.is_some_and(|b| seconds >= b);
         let checkpoint_due = self.checkpoint_at.is_some_and(|k| step.iteration + 1 >= k);
