@@ -354,8 +354,8 @@ mod tests {
                 );
             }
         }
-        // Found by fuzzing the numeric options: a scale of 1e300 overflowed the image's
-        // allocation (a panic), and a huge N the estimator's.
+        // A scale or an N whose buffers could not be allocated is refused while parsing (the
+        // allocation would overflow).
         for value in ["65", "1e300"] {
             refused_last(&format!("optimize shadow --scale {value}"), "<= 64");
         }

@@ -131,10 +131,9 @@ fn help_exits_0() {
     assert!(String::from_utf8_lossy(&output.stdout).contains("[default: the task's]"));
 }
 
-/// Found by fuzzing the numeric options (regressions): an iteration count near `usize::MAX`
-/// made the paper's loop reserve a history row for each (a capacity-overflow panic) and the
-/// adaptive search's budget N x iterations wrap to 0 (a wrong error); a scale of 1e300
-/// overflowed the image's allocation and a huge N the estimator's (both now refused while
+/// Extreme counts and scales: an iteration count near `usize::MAX` (the paper's loop must not
+/// reserve a history row for each, the adaptive search's budget N x iterations must not wrap
+/// to 0), a scale of 1e300 and a huge N (whose allocations would overflow: refused while
 /// parsing). Each runs (stopped after an iteration) or is refused, never a panic.
 #[test]
 fn found_extreme_counts_and_scales_run_or_are_refused_without_a_panic() {

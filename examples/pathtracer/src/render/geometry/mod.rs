@@ -259,8 +259,8 @@ impl Geometry {
             None => self.quads.iter().any(|q| q.intersect(o, d, tmax) < tmax),
         };
         // The boxes, the set and the meshes are [`Geometry::rest_occluded`]'s, written out
-        // again: calling it here made SHADOW 2-7 % slower on one thread (the render loop
-        // compiled differently), for the same answers.
+        // again: calling it here makes the render loop compile differently and SHADOW slower
+        // (see benches/render.rs), for the same answers.
         if quad_hit
             || self.spheres.iter().any(|s| s.intersect(o, d, tmax) < tmax)
             || self.boxes.iter().any(|b| b.intersect(o, d, tmax) < tmax)
