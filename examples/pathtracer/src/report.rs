@@ -127,9 +127,16 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(23, 190, 207),
 ];
 
-/// A PNG plot of several series, with a legend; on a log axis, non-positive values are
-/// dropped (they cannot be drawn) rather than clamped.
+/// A PNG plot of several series, framed, with a legend; on a log axis, non-positive values
+/// are dropped (they cannot be drawn) rather than clamped.
+///
+/// # Errors
+/// An axis without a label (every plot says what its axes count), a missing font, a file
+/// that cannot be written.
 pub fn plot(path: &Path, axes: &Axes<'_>, series: &[Series]) -> Result<()> {
+    if axes.x_label.trim().is_empty() || axes.y_label.trim().is_empty() {
+        return Err(format!("plot {}: both axes need a label", path.display()).into());
+    }
     register_font()?;
     let keep = |v: f64, scale: Scale| v.is_finite() && (scale == Scale::Linear || v > 0.0);
     let points: Vec<Vec<(f64, f64)>> = series
@@ -214,6 +221,12 @@ where
         .x_label_formatter(&|v| short_number(*v))
         .y_label_formatter(&|v| short_number(*v))
         .draw()?;
+    // The frame: the mesh draws the left and bottom axes only.
+    let (px, py) = chart.plotting_area().get_pixel_range();
+    root.draw(&Rectangle::new(
+        [(px.start, py.start), (px.end - 1, py.end - 1)],
+        BLACK.stroke_width(1),
+    ))?;
     for (i, (s, pts)) in series.iter().zip(points).enumerate() {
         let color = PALETTE[i % PALETTE.len()];
         let style = ShapeStyle::from(&color).stroke_width(2);
@@ -328,4 +341,59 @@ pub fn spread(values: &[f64]) -> (f64, f64, f64) {
         0.5 * (v[mid - 1] + v[mid])
     };
     (median, v[0], v[v.len() - 1])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lengths of the longest run of dark pixels in any row and in any column.
+    fn longest_dark_lines(path: &Path) -> (u32, u32, u32, u32) {
+        let image = image::open(path).expect("the plot reads back").to_rgb8();
+        let dark = |x: u32, y: u32| image.get_pixel(x, y).0.iter().all(|&c| c < 60);
+        let longest = |n: u32, at: &dyn Fn(u32) -> bool| {
+            let (mut best, mut run) = (0, 0);
+            for i in 0..n {
+                run = if at(i) { run + 1 } else { 0 };
+                best = best.max(run);
+            }
+            best
+        };
+        let (w, h) = image.dimensions();
+        let rows: Vec<u32> = (0..h).map(|y| longest(w, &|x| dark(x, y))).collect();
+        let columns: Vec<u32> = (0..w).map(|x| longest(h, &|y| dark(x, y))).collect();
+        // Long lines in the top half (the frame's top) and the right half (its right side).
+        let top = rows[..h as usize / 2].iter().copied().max().unwrap_or(0);
+        let right = columns[w as usize / 2..].iter().copied().max().unwrap_or(0);
+        (w, h, top, right)
+    }
+
+    /// A plot is framed on all four sides: its top and right edges are lines as long as most
+    /// of the image, as the axes are; and a plot without axis labels is refused.
+    #[test]
+    fn plots_are_framed_and_need_labelled_axes() {
+        let dir = std::env::temp_dir().join(format!("plateau-plot-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("framed.png");
+        let series = [Series::line("a", vec![(0.0, 1.0), (1.0, 0.1), (2.0, 0.01)])];
+        if let Err(e) = plot(&path, &Axes::log_y("t", "iteration", "MSE"), &series) {
+            // Without the font no plot is drawn at all (said in the error).
+            assert!(e.to_string().contains("font"), "{e}");
+            return;
+        }
+        let (w, h, top, right) = longest_dark_lines(&path);
+        assert!(
+            top > w / 2,
+            "no frame along the top: longest line {top} of {w}"
+        );
+        assert!(
+            right > h / 2,
+            "no frame along the right: longest line {right} of {h}"
+        );
+        for (x, y) in [("", "MSE"), ("iteration", " ")] {
+            let refused = plot(&path, &Axes::log_y("t", x, y), &series).unwrap_err();
+            assert!(refused.to_string().contains("label"), "{refused}");
+        }
+        fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -165,10 +165,9 @@ fn the_real_checkpoints_load_and_pass_the_fuzz_body() {
     }
 }
 
-/// Found by cargo-fuzz (then by the tree edits above, once they could write a line break): a
-/// string of the file that the message quotes (the parser's "unknown variant", another
-/// build's version, another task's name) broke the one-line refusal over several lines. Each
-/// is now one line, the control characters escaped, and at most a few hundred characters.
+/// A string of the file that the message quotes (the parser's "unknown variant", another
+/// build's version, another task's name) may hold a line break: the refusal stays one line,
+/// the control characters escaped, and at most a few hundred characters.
 #[test]
 fn found_a_quoted_line_break_stays_on_one_line() {
     let seed = std::str::from_utf8(&seeds()[0]).unwrap();

@@ -27,6 +27,7 @@ use crate::tasks::{self, Task, View};
 
 #[derive(Parser)]
 #[command(
+    version,
     about = "Plateau-free differentiable path tracing: the paper's tasks on a CPU path tracer"
 )]
 struct Cli {
@@ -172,19 +173,28 @@ fn shell_line(args: &[String]) -> String {
         .join(" ")
 }
 
-/// clap's message without its blank lines, usage and tips, as one line.
+/// clap's message as one line: the error, then its tips ("a similar argument exists: ...")
+/// after semicolons; the blank lines, the usage and the pointer to `--help` left out.
 fn one_line(e: &clap::Error) -> String {
-    e.to_string()
-        .lines()
-        .map(str::trim)
-        .filter(|l| {
-            !(l.is_empty()
-                || l.starts_with("For more information")
-                || l.starts_with("Usage:")
-                || l.starts_with("tip:"))
-        })
-        .collect::<Vec<_>>()
-        .join(" ")
+    let text = e.to_string();
+    let mut message: Vec<&str> = Vec::new();
+    let mut tips: Vec<&str> = Vec::new();
+    for line in text.lines().map(str::trim) {
+        if line.starts_with("Usage:") || line.starts_with("For more information") {
+            break;
+        }
+        if line.starts_with("tip:") {
+            tips.push(line);
+        } else if !line.is_empty() {
+            message.push(line);
+        }
+    }
+    let mut one = message.join(" ");
+    for tip in tips {
+        one.push_str("; ");
+        one.push_str(tip);
+    }
+    one
 }
 
 /// A command line that parses but asks for something impossible (arguments that exclude each
@@ -344,8 +354,8 @@ mod tests {
                 );
             }
         }
-        // Found by fuzzing the numeric options: a scale of 1e300 overflowed the image's
-        // allocation (a panic), and a huge N the estimator's.
+        // A scale or an N whose buffers could not be allocated is refused while parsing (the
+        // allocation would overflow).
         for value in ["65", "1e300"] {
             refused_last(&format!("optimize shadow --scale {value}"), "<= 64");
         }

@@ -41,7 +41,10 @@ pub(super) struct Args {
 /// Overrides of a task's defaults (supplemental Table 1).
 #[derive(clap::Args, Clone, Debug, Default)]
 struct RunOptions {
-    /// Optimisation steps [default: the task's].
+    /// Iterations of the paper's loop, each a step from one gradient of N renders; the other
+    /// methods get the same N x iterations renders and count their own iterations (the
+    /// adaptive search's generations, the image method's Jacobians and steps) [default: the
+    /// task's].
     #[arg(long, allow_negative_numbers = true, value_parser = values::at_least(1usize))]
     iterations: Option<usize>,
     /// N: evaluations of the objective per gradient (even with antithetic pairs; at most
@@ -82,7 +85,8 @@ struct RunOptions {
     #[arg(long, allow_hyphen_values = true, value_parser = values::positive)]
     fd_step: Option<f64>,
     /// Render the current parameters for the image-error curve every this many iterations
-    /// [default: a hundredth of the iterations].
+    /// (the adaptive search: every this many x N renders) [default: a hundredth of the
+    /// iterations].
     #[arg(long, allow_negative_numbers = true, value_parser = values::at_least(1usize))]
     eval_every: Option<usize>,
     /// A time budget in seconds: picks resolution, spp (and if need be iterations) to fit,
@@ -98,7 +102,8 @@ struct RunOptions {
     /// the paper's loop, whose annealing is compressed to the rest [default: 0.5].
     #[arg(long, value_name = "FRACTION", allow_hyphen_values = true, value_parser = values::share)]
     polish: Option<f64>,
-    /// No progress bar.
+    /// No progress: neither the bar (on a terminal) nor the plain line every few seconds
+    /// (elsewhere) with the iteration, the renders, the best loss and the time.
     #[arg(long)]
     quiet: bool,
 }
@@ -312,10 +317,20 @@ pub(super) fn run(args: Args, given: &dyn Fn(&str) -> bool) -> Result<()> {
             (task, requested, None)
         }
     };
+    let default_out = resume.is_none() && out.is_none();
     let dir = resume
         .clone()
         .or(out)
         .unwrap_or_else(|| Path::new("out").join(task.name()));
+    if default_out {
+        // The default, unlike a value written, has not been checked while parsing.
+        values::writable_dir(&dir).map_err(|e| {
+            usage(format!(
+                "invalid value '{}' for '--out <OUT>' (its default): {e}",
+                dir.display()
+            ))
+        })?;
+    }
     interrupt::install_handler();
     with_threads(opts.render.threads, || {
         let settings = match &checkpoint {
@@ -350,7 +365,7 @@ pub(super) fn run(args: Args, given: &dyn Fn(&str) -> bool) -> Result<()> {
         let outcome = run::optimize_with(&task, &settings, control)?;
         let s = &outcome.summary;
         println!(
-            "{}: param MSE {:.3e} -> {:.3e}, image MSE {:.3e} -> {:.3e}, {:.3} s/iteration ({} iterations{}), outputs in {}",
+            "{}: param MSE {:.3e} -> {:.3e}, image MSE {:.3e} -> {:.3e}, {:.3} s/iteration ({} iterations, {} renders{}), outputs in {}",
             s.task,
             s.initial_param_mse,
             s.param_mse,
@@ -358,6 +373,7 @@ pub(super) fn run(args: Args, given: &dyn Fn(&str) -> bool) -> Result<()> {
             s.image_mse,
             s.seconds_per_iteration,
             s.iterations,
+            s.renders,
             if s.interrupted { ", interrupted" } else { "" },
             dir.display()
         );

@@ -18,7 +18,7 @@ pub(super) struct Args {
     #[arg(long, value_delimiter = ',', required = true, value_parser = values::runs_dir)]
     runs: Vec<PathBuf>,
     /// The page to write.
-    #[arg(long, default_value = "docs/results/seeds.md")]
+    #[arg(long, default_value = "docs/results/seeds.md", value_parser = values::out_file)]
     page: PathBuf,
 }
 

@@ -21,7 +21,7 @@ pub(super) struct Args {
     #[arg(long, value_delimiter = ',', default_values_t = [0.05, 0.1, 0.2], value_parser = values::fraction)]
     windows: Vec<f64>,
     /// The page to write.
-    #[arg(long, default_value = "docs/results/stopping.md")]
+    #[arg(long, default_value = "docs/results/stopping.md", value_parser = values::out_file)]
     page: PathBuf,
 }
 
@@ -93,6 +93,9 @@ pub(super) fn run(args: Args) -> Result<()> {
         }
     }
     print!("{md}");
+    if let Some(dir) = args.page.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
     std::fs::write(&args.page, md)?;
     Ok(())
 }

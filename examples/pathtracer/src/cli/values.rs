@@ -3,7 +3,7 @@
 //! allowed (clap adds the first two; these say the third), and exit code 2.
 
 use std::fmt::Display;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
 use plateau_free::Sampling;
@@ -109,14 +109,79 @@ pub(super) fn task(s: &str) -> Result<String, String> {
     }
 }
 
-/// A directory to write into: new, or an existing directory (not a file).
+/// A directory to write into: new, or an existing directory (not a file), where this
+/// process may write (checked before any work, so that a run does not end unable to write).
 pub(super) fn out_dir(s: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(s);
     if s.is_empty() || path.is_file() {
-        Err("allowed: a directory (new or existing), not a file".into())
-    } else {
-        Ok(path)
+        return Err("allowed: a directory (new or existing), not a file".into());
     }
+    writable_dir(&path)?;
+    Ok(path)
+}
+
+/// A file to write (a page): not a directory, in a directory this process may write.
+pub(super) fn out_file(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    if s.is_empty() || path.is_dir() {
+        return Err("allowed: a file name, not a directory".into());
+    }
+    writable_file(&path)?;
+    Ok(path)
+}
+
+/// Refuses `path`, a directory to write into (made if missing), unless this process can
+/// write there: a file is made and removed in the directory if it exists, else in its
+/// nearest existing ancestor (which must be a directory). Nothing is left behind.
+pub(super) fn writable_dir(path: &Path) -> Result<(), String> {
+    let mut existing = path;
+    while !existing.as_os_str().is_empty() && !existing.exists() {
+        existing = existing.parent().unwrap_or(Path::new(""));
+    }
+    if existing.as_os_str().is_empty() {
+        existing = Path::new(".");
+    }
+    if !existing.is_dir() {
+        return Err(format!(
+            "cannot write there: {} is not a directory",
+            existing.display()
+        ));
+    }
+    probe(existing)
+}
+
+/// Refuses `path`, a file to write, unless this process can write it: an existing file is
+/// opened for appending (and left as it was), a new one's directory is probed as
+/// [`writable_dir`] does.
+fn writable_file(path: &Path) -> Result<(), String> {
+    if path.is_file() {
+        return std::fs::OpenOptions::new()
+            .append(true)
+            .open(path)
+            .map(drop)
+            .map_err(|e| format!("cannot write there: {e}"));
+    }
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => writable_dir(dir),
+        _ => writable_dir(Path::new(".")),
+    }
+}
+
+/// Makes and removes a file in the existing directory `dir`.
+fn probe(dir: &Path) -> Result<(), String> {
+    let name = format!(".pathtracer-write-test-{}", std::process::id());
+    let file = dir.join(name);
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&file)
+        .map_err(|e| {
+            let shown = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+            format!("cannot write there: {}: {e}", shown.display())
+        })?;
+    // The file was made: the directory is writable, whether or not it can be removed.
+    let _ = std::fs::remove_file(&file);
+    Ok(())
 }
 
 /// An existing directory of runs (to read).
@@ -134,6 +199,7 @@ pub(super) fn runs_dir(s: &str) -> Result<PathBuf, String> {
 pub(super) fn run_dir(s: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(s);
     if !s.is_empty() && path.join(crate::run::checkpoint::FILE).is_file() {
+        writable_dir(&path)?;
         Ok(path)
     } else {
         Err(format!(
@@ -151,7 +217,10 @@ pub(super) fn image_file(s: &str) -> Result<PathBuf, String> {
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     match suffix.as_deref() {
-        Some("png" | "exr") if !path.is_dir() => Ok(path),
+        Some("png" | "exr") if !path.is_dir() => {
+            writable_file(&path)?;
+            Ok(path)
+        }
         _ => Err("allowed: a file name ending in .png or .exr".into()),
     }
 }

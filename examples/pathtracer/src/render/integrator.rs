@@ -52,9 +52,9 @@ pub fn render(scene: &Scene, settings: &Settings) -> Image {
     let camera = &scene.camera;
     let (width, height) = (camera.width, camera.height);
     let mut image = Image::new(width, height);
-    // Packing pays from three quads on (CUP's three: about 5 % faster on one thread); with
-    // one quad (SHADOW, SORT, TEXTURE) the padded lanes made those renders 10-25 % slower.
-    // Either way the bits are the same.
+    // Packing pays from three quads on (CUP's three); with one quad (SHADOW, SORT, TEXTURE)
+    // the padded lanes cost more than they save (see benches/render.rs). Either way the bits
+    // are the same.
     let quads = &scene.geometry.quads;
     let lanes = (quads.len() >= 3).then(|| QuadLanes::pack(quads));
     let tracer = Tracer::new(scene, lanes.as_deref(), settings);
@@ -97,8 +97,8 @@ struct Tracer<'a> {
     env_nee: bool,
 }
 
-/// One camera path in flight: the state the old `trace` loop kept in locals, so that paths can
-/// take turns segment by segment and the CPU overlaps their (independent) dependency chains.
+/// One camera path in flight: its whole state kept in one value rather than in a loop's locals,
+/// so that paths can take turns segment by segment and the CPU overlaps their (independent) dependency chains.
 struct Path {
     o: Vec3A,
     d: Vec3A,

@@ -2,8 +2,8 @@
 //! in one pass of 4-wide arithmetic, and a small stack that is not zeroed per query.
 //!
 //! obvhs's own traversal (`Bvh2::ray_traverse`) reads two 48-byte nodes per step, tests their
-//! boxes one after the other, and zeroes a 96-entry stack on every query (1.5-2 % of CUP's and
-//! SORT's time went to that `memset`). Here a step reads one 64-byte [`Pair`]: per axis the
+//! boxes one after the other, and zeroes a 96-entry stack on every query (a `memset` that
+//! shows in CUP's and SORT's profiles). Here a step reads one 64-byte [`Pair`]: per axis the
 //! lanes hold (left min, right min, left max, right max), so one subtraction and one
 //! multiplication give both children's slab distances.
 //!

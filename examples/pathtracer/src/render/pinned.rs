@@ -4,8 +4,8 @@
 //! reproducible only while every render draws the same bits. Each task's target, at half its
 //! resolution, 3 samples per pixel (an odd count: paths traced in pairs and the one left
 //! over) and seed 7, is hashed (FNV-1a over the values' bits, row by row, R G B); the hashes
-//! were recorded from the renderer of commit 1bf08d1, before the speed work of issue 25
-//! (the EXR the `render` command wrote, `--target --scale 0.5 --spp 3 --seed 7`).
+//! are those of the renderer the committed results were made with (the EXR the `render`
+//! command writes, `--target --scale 0.5 --spp 3 --seed 7`).
 
 use crate::tasks::{self, View};
 

@@ -24,7 +24,8 @@ use std::time::{Duration, Instant};
 
 use plateau_free::{Minimizer, Objective, Points, Stop as LibraryStop, Strategy};
 
-use super::{progress_bar, Ended, Method, Progress, Row, Run};
+use super::meter::{At, Meter, Unit};
+use super::{Ended, Method, Progress, Row, Run};
 use crate::report::Result;
 
 /// The first row of the polish in a polished run of `budget` evaluations with `samples` per
@@ -71,7 +72,7 @@ where
         bests: RefCell::new(vec![start.to_vec()]),
         optimisation_time: Cell::new(Duration::ZERO),
         last: Cell::new(Instant::now()),
-        bar: progress_bar(task.name(), budget, run.ctl.progress),
+        bar: Meter::new(task.name(), budget, Unit::Renders, run.ctl.progress),
         log: RefCell::new(Vec::new()),
         points_hash: Cell::new(FNV_START),
         replay: Vec::new(),
@@ -100,7 +101,7 @@ where
         objective
             .optimisation_time
             .set(Duration::from_secs_f64(c.optimisation_seconds));
-        objective.bar.set_position(values.len() as u64);
+        objective.bar.set_position(values.len());
         finished = c.finished;
     }
     objective.schedule_checkpoint();
@@ -149,7 +150,7 @@ where
         // At the end (also when a finished checkpoint was replayed to its end).
         objective.save(finished);
     }
-    objective.bar.finish_and_clear();
+    objective.bar.finish();
     let history = objective.history.into_inner();
     let bests = objective.bests.into_inner();
     // Six snapshots, evenly spaced over the iterations (the last is the returned point).
@@ -195,7 +196,7 @@ struct Recording<'a, L> {
     bests: RefCell<Vec<Vec<f64>>>,
     optimisation_time: Cell<Duration>,
     last: Cell<Instant>,
-    bar: indicatif::ProgressBar,
+    bar: Meter,
     /// Every value so far, in order (the checkpoint's).
     log: RefCell<Vec<f64>>,
     /// FNV-1a of every point so far.
@@ -332,7 +333,7 @@ impl<L: Fn(&[f64], u64) -> f64> Recording<'_, L> {
             // The start, which the Minimizer evaluates first and alone: it counts for the best
             // point and the evaluations, and has no row of its own (a row is an iteration).
             drop(best);
-            self.bar.inc(count as u64);
+            self.bar.set_position(self.log.borrow().len());
             self.last.set(Instant::now());
             return;
         }
@@ -364,10 +365,15 @@ impl<L: Fn(&[f64], u64) -> f64> Recording<'_, L> {
         if n <= KEEP_BESTS_MAX_DIM {
             self.bests.borrow_mut().push(best.1.clone());
         }
-        self.bar
-            .set_message(format!("best {:.3e}  spread {:.3}", best.0, spread));
-        self.bar.inc(count as u64);
         let done = history.len();
+        self.bar.update(
+            At {
+                iterations: done,
+                renders: self.log.borrow().len(),
+                loss: best.0,
+            },
+            format!("best {:.3e}  spread {:.3}", best.0, spread),
+        );
         drop((best, history));
         if after < self.budget {
             if self.run.stop_requested(done) {

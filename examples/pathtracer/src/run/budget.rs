@@ -19,14 +19,13 @@ pub fn plan_for_budget(task: &Task, s: &Settings, budget: f64) -> (Settings, Str
 /// The budget planner given the time of one render at the defaults.
 ///
 /// The cost model: an iteration costs N renders, and a render's time is proportional to spp
-/// times pixels (`experiment tradeoff` measured N^1.02, spp^0.99 and pixels^0.99 on SHADOW
-/// and GI). The order of the cuts follows the same study's errors (docs/results/tradeoff.md):
-/// iterations are kept (the annealing schedule needs them); the resolution goes first, down
-/// to half (on GI a quarter of the pixels kept the default's error, 1.65e-3 against
-/// 1.61e-3, while a quarter of the spp made it 3x worse); then spp, halved down to 4 at half
-/// resolution; then the resolution again, to a quarter (GI: 10x worse, the last resort before
-/// fewer iterations); only then fewer iterations. The loop also stops when the budget is
-/// spent.
+/// times pixels (`experiment tradeoff` finds each close to linear on SHADOW and GI). The
+/// order of the cuts follows the same study's errors (docs/results/tradeoff.md): iterations
+/// are kept (the annealing schedule needs them); the resolution goes first, down to half (on
+/// GI a quarter of the pixels kept the default's error, while a quarter of the spp made it
+/// worse); then spp, halved down to 4 at half resolution; then the resolution again, to a
+/// quarter (on GI far worse: the last resort before fewer iterations); only then fewer
+/// iterations. The loop also stops when the budget is spent.
 pub fn plan_with_render_time(render: f64, s: &Settings, budget: f64) -> (Settings, String) {
     let evaluations = s.iterations as f64 * s.samples.max(1) as f64;
     let predicted =

@@ -6,10 +6,10 @@
 //! It gets what the other methods get, nothing tuned per task: N x iterations renders, N / 2
 //! antithetic pairs per Jacobian, the task's sigma0 and box, the run's seed and renderer
 //! seeds ([`super::Crn`]). One row of the history per ask told (a Jacobian's pairs or a
-//! step's point): its `iteration` is the count of renders so far (the axis on which methods
-//! of different iteration costs compare), `loss` and `image_mse` the current point's image
-//! MSE, `sigma` the spread of the last Jacobian. No checkpoint: a run of this method starts
-//! over.
+//! step's point), one iteration of the method: its `renders` is the count of renders so far
+//! (the axis on which methods of different iteration costs compare), `loss` and `image_mse`
+//! the current point's image MSE, `sigma` the spread of the last Jacobian. No checkpoint: a
+//! run of this method starts over.
 
 use std::cell::Cell;
 use std::time::{Duration, Instant};
@@ -17,7 +17,8 @@ use std::time::{Duration, Instant};
 use plateau_free::LeastSquares;
 
 use super::adaptive::Finished;
-use super::{progress_bar, Crn, Ended, Row, Run};
+use super::meter::{At, Meter, Unit};
+use super::{Crn, Ended, Row, Run};
 use crate::report::Result;
 
 /// Above this many parameters the current point is not kept per row (the progress strip
@@ -46,7 +47,7 @@ pub(super) fn run(run: &Run<'_>, render_time: &Cell<Duration>) -> Result<Finishe
     let reference = &run.reference.data;
     let m = reference.len();
     let target = task.target();
-    let bar = progress_bar(task.name(), budget, run.ctl.progress);
+    let bar = Meter::new(task.name(), budget, Unit::Renders, run.ctl.progress);
     let clock = Instant::now();
     let (mut history, mut kept) = (Vec::new(), vec![start.to_vec()]);
     let mut outputs = Vec::new();
@@ -67,7 +68,7 @@ pub(super) fn run(run: &Run<'_>, render_time: &Cell<Duration>) -> Result<Finishe
         method.tell(&outputs)?;
         let mse = method.fun() / m as f64;
         history.push(Row {
-            iteration: method.evaluations(),
+            iteration: history.len(),
             sigma: method.sigma(),
             loss: mse,
             param_mse: task.param_mse_to(method.theta(), &target),
@@ -81,10 +82,16 @@ pub(super) fn run(run: &Run<'_>, render_time: &Cell<Duration>) -> Result<Finishe
         if task.dim() <= KEEP_MAX_DIM {
             kept.push(method.theta().to_vec());
         }
-        bar.set_position(method.evaluations() as u64);
-        bar.set_message(format!("image MSE {mse:.3e}  sigma {:.3}", method.sigma()));
+        bar.update(
+            At {
+                iterations: history.len(),
+                renders: method.evaluations(),
+                loss: mse,
+            },
+            format!("image MSE {mse:.3e}  sigma {:.3}", method.sigma()),
+        );
     }
-    bar.finish_and_clear();
+    bar.finish();
     let best = method.finish()?;
     let last = kept.len() - 1;
     let mut snapshots: Vec<Vec<f64>> = (0..6).map(|k| kept[k * last / 5].clone()).collect();

@@ -1,36 +1,37 @@
-//! One optimisation of a task: the reference, the loop (plateau-free gradient or a
-//! baseline), the progress bar, and the outputs.
+//! One optimisation of a task: the reference, the method's loop, its progress, and the
+//! outputs.
 //!
-//! [`optimize`] reads as its steps: render the reference and the start, build the loss, the
-//! estimator and the optimiser, run the loop under a [`Recorder`], measure the end, write the
-//! files. What a run can be told is in `settings.rs`, what it yields in `outcome.rs`, the
-//! files it writes in `outputs.rs`, the time-budget planner in `budget.rs`.
+//! [`optimize`] reads as its steps: render the reference and the start, build the loss, run
+//! the method, measure the end, write the files. The methods: the paper's loop in `paper.rs`,
+//! the library's adaptive search (and polished loop) in `adaptive.rs`, the image method in
+//! `image.rs`. What a run can be told is in `settings.rs`, what it yields in `outcome.rs`,
+//! the files it writes in `outputs.rs`, its progress display in `meter.rs`, the time-budget
+//! planner in `budget.rs`, what an earlier run left in `earlier.rs`.
 
 mod adaptive;
 mod budget;
 pub mod checkpoint;
+mod earlier;
 mod image;
 pub mod interrupt;
+mod meter;
 mod outcome;
 mod outputs;
+mod paper;
 mod recount;
 mod settings;
 mod stall_replay;
 
 use std::cell::Cell;
-use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use indicatif::{ProgressBar, ProgressStyle};
-use plateau_free::baseline::{FiniteDifference, Spsa};
-use plateau_free::{
-    Adam, Annealer, GradientEstimator, Optimizer, OptimizerState, PlateauFreeGradient, Seeded, Step,
-};
-
 pub use budget::{plan_for_budget, plan_with_render_time};
 pub use checkpoint::{Build, Checkpoint, CheckpointError, Every, Progress};
+pub use earlier::Earlier;
+pub use meter::{LINE_SECONDS, LINE_SECONDS_VAR};
 pub use outcome::{renders_to, write_history, Outcome, Row, Summary};
+pub use paper::optimizer;
 pub use recount::{loop_renders, recount};
 pub use settings::{
     eval_every, Crn, Method, Settings, CURVE_POINTS, MAX_SAMPLES, MAX_SCALE, POLISH, POLISH_BEFORE,
@@ -127,7 +128,7 @@ pub fn optimize_with(task: &Task, s: &Settings, ctl: Control<'_>) -> Result<Outc
         } else if s.method == Method::Image {
             image::run(&run, &render_time)?
         } else {
-            paper_loop(&run, &loss, &renders)?
+            paper::run(&run, &loss, &renders)?
         };
 
     let final_image = task.render(&final_theta, s.seed, s.spp, view);
@@ -163,56 +164,6 @@ pub fn optimize_with(task: &Task, s: &Settings, ctl: Control<'_>) -> Result<Outc
         )?;
     }
     Ok(outcome)
-}
-
-/// What an earlier run left at a checkpoint file, for the commands that make many runs
-/// (`all`, the experiments): a finished run (kept), a run to continue, or nothing usable.
-pub enum Earlier {
-    /// The checkpoint of a finished run of this task and these settings.
-    Finished(Box<Checkpoint>),
-    /// The checkpoint of an unfinished run of this task and these settings.
-    Unfinished(Box<Checkpoint>),
-    /// No checkpoint, or one that is refused (the reason, if there was a file): start over.
-    None(Option<CheckpointError>),
-}
-
-impl Earlier {
-    /// Reads and checks the checkpoint at `path` for a run of `task` with the settings
-    /// `requested`.
-    pub fn at(path: &Path, task: &Task, requested: &Settings) -> Earlier {
-        let checked =
-            Checkpoint::load(path).and_then(|c| c.check_matches(task, requested, path).map(|()| c));
-        match checked {
-            Ok(c) if c.finished => Earlier::Finished(Box::new(c)),
-            Ok(c) => Earlier::Unfinished(Box::new(c)),
-            Err(CheckpointError::Unreadable { error, .. })
-                if error.kind() == std::io::ErrorKind::NotFound =>
-            {
-                Earlier::None(None)
-            }
-            Err(e) => Earlier::None(Some(e)),
-        }
-    }
-
-    /// The run to continue (`None`: start over) and the settings to run with: the
-    /// checkpoint's, else `requested`. Says which on stderr, naming the run `label`.
-    pub fn resume(self, label: &str, requested: &Settings) -> (Option<Checkpoint>, Settings) {
-        let resume = match self {
-            Earlier::Finished(c) | Earlier::Unfinished(c) => {
-                eprintln!("{label}: resuming from iteration {}", c.history.len());
-                Some(*c)
-            }
-            Earlier::None(None) => None,
-            Earlier::None(Some(why)) => {
-                eprintln!("{label}: starting over ({why})");
-                None
-            }
-        };
-        let settings = resume
-            .as_ref()
-            .map_or_else(|| requested.clone(), |c| c.settings.clone());
-        (resume, settings)
-    }
 }
 
 /// What both loops are handed: the task, the settings, the reference, the start, the
@@ -286,126 +237,6 @@ impl Saver<'_> {
     }
 }
 
-/// Why the paper loop's observer stopped a segment of the run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Why {
-    /// The time budget is spent: the run ends.
-    Budget,
-    /// Ctrl-C or `stop_after`: the run stops, to be continued.
-    Interrupt,
-    /// A checkpoint is due: written, then the loop continues.
-    Checkpoint,
-}
-
-/// The paper's loop (plateau-free gradient, finite differences or SPSA; Adam; annealing),
-/// run in segments between checkpoints: each segment continues the library's
-/// [`OptimizerState`] of the one before ([`Optimizer::minimize_from`]), so the segments give
-/// bit for bit the run in one go.
-fn paper_loop<L>(run: &Run<'_>, loss: &L, renders: &Cell<usize>) -> Result<adaptive::Finished>
-where
-    L: Fn(&[f64], u64) -> f64,
-{
-    let (task, s, ctl) = (run.task, run.s, run.ctl);
-    let mut estimator = estimator(s, loss)?;
-    let mut optimizer = optimizer(task, s)?;
-    let mut recorder = Recorder::new(task, s, run.reference, run.start, ctl.progress, renders);
-    let (mut state, mut finished) = match &ctl.resume {
-        Some(c) => {
-            let Progress::Loop { state } = &c.progress else {
-                return Err("the checkpoint is of an adaptive run, this run is not".into());
-            };
-            recorder.resume(c);
-            (state.clone(), c.finished)
-        }
-        None => (OptimizerState::new(run.start)?, false),
-    };
-    let mut interrupted = false;
-    while !finished {
-        let done = state.iteration;
-        recorder.checkpoint_at = ctl
-            .every
-            .next_after(done, recorder.seconds_per_iteration())
-            .map(|k| done + k);
-        recorder.restart_clock();
-        let segment = optimizer.minimize_from(&mut *estimator, state, |step| {
-            let (over_budget, checkpoint_due) = recorder.observe(step);
-            let why = if over_budget {
-                Some(Why::Budget)
-            } else if run.stop_requested(step.iteration + 1) {
-                Some(Why::Interrupt)
-            } else {
-                checkpoint_due.then_some(Why::Checkpoint)
-            };
-            recorder.why = why;
-            if why.is_some() {
-                ControlFlow::Break(())
-            } else {
-                ControlFlow::Continue(())
-            }
-        });
-        state = match segment {
-            Ok(state) => state,
-            Err(e) => {
-                // The state after the last good iteration is kept, to continue from.
-                let (history, snapshots, time) = recorder.parts();
-                run.saver.save(
-                    false,
-                    Progress::Loop { state: *e.state },
-                    history,
-                    snapshots,
-                    time,
-                );
-                return Err(e.error.into());
-            }
-        };
-        let complete = state.iteration >= s.iterations;
-        match recorder.why.take() {
-            _ if complete => finished = true,
-            None | Some(Why::Budget) => finished = true,
-            Some(Why::Interrupt) => {
-                interrupted = true;
-                break;
-            }
-            Some(Why::Checkpoint) => {
-                let (history, snapshots, time) = recorder.parts();
-                run.saver.save(
-                    false,
-                    Progress::Loop {
-                        state: state.clone(),
-                    },
-                    history,
-                    snapshots,
-                    time,
-                );
-            }
-        }
-    }
-    drop(estimator);
-    let (history, snapshots, time) = recorder.parts();
-    run.saver.save(
-        finished,
-        Progress::Loop {
-            state: state.clone(),
-        },
-        history,
-        snapshots,
-        time,
-    );
-    let (history, mut snapshots, optimisation_time) = recorder.finish();
-    if interrupted {
-        // The strip of an interrupted run ends where it stopped.
-        snapshots.push(state.theta.clone());
-    }
-    let ended = Ended {
-        iterations: state.iteration,
-        evaluations: state.history.evaluations,
-        renders: renders.get(),
-        stopped_early: finished && state.iteration < s.iterations,
-        interrupted,
-    };
-    Ok((ended, state.theta, history, snapshots, optimisation_time))
-}
-
 /// The objective: the image MSE of a render at `theta` against `reference`, with the seed
 /// [`Crn`] picks; the time spent rendering accumulates in `render_time`, the renders are
 /// counted in `renders`.
@@ -427,174 +258,6 @@ fn image_loss<'a>(
         render_time.set(render_time.get() + t.elapsed());
         renders.set(renders.get() + 1);
         image.mse(reference)
-    }
-}
-
-/// The gradient estimator [`Settings::method`] names, over `loss`.
-fn estimator<'a, L>(s: &Settings, loss: &'a L) -> Result<Box<dyn GradientEstimator + 'a>>
-where
-    L: Fn(&[f64], u64) -> f64,
-{
-    Ok(match s.method {
-        Method::Plateau => Box::new(
-            PlateauFreeGradient::new(Seeded(loss))
-                .samples(s.samples)
-                .sampling(s.sampling)
-                .antithetic(s.antithetic)
-                .seed(s.seed),
-        ),
-        Method::Fd => Box::new(FiniteDifference::new(Seeded(loss), s.fd_step)?.seed(s.seed)),
-        Method::Spsa => Box::new(Spsa::new(Seeded(loss)).seed(s.seed)),
-        Method::Adaptive | Method::Polished | Method::Image => {
-            unreachable!(
-                "the library's Minimizer and LeastSquares run these: run::adaptive, run::image"
-            )
-        }
-    })
-}
-
-/// Adam (projected onto the task's box, if it has one) under the paper's annealing schedule
-/// or, for the ablation, a constant sigma: the optimiser of [`optimize`], also for loops that
-/// evaluate elsewhere (the MPI example).
-///
-/// # Errors
-/// Settings that Adam or the annealer reject (a learning rate or sigma0 not positive, zero
-/// iterations).
-pub fn optimizer(task: &Task, s: &Settings) -> Result<Optimizer> {
-    let mut adam = Adam::new(s.lr)?;
-    if let Some((lower, upper)) = task.bounds() {
-        adam = adam.bounds(lower, upper)?;
-    }
-    let annealer = if s.anneal {
-        Annealer::paper(s.sigma0, s.iterations)?
-    } else {
-        Annealer::constant(s.sigma0, s.iterations)?
-    };
-    // The loop keeps only the last theta; the recorder keeps six snapshots for the progress
-    // strip (a 49,152-parameter theta per iteration would be 1.5 GB over 4000 iterations).
-    let mut optimizer = Optimizer::new(adam, annealer).record_theta(false);
-    if let Some(window) = s.stall {
-        optimizer = optimizer.stop_when_stalled(window)?;
-    }
-    Ok(optimizer)
-}
-
-/// What the loop records after each iteration: a row of the history, six snapshots of theta
-/// for the progress strip, the optimisation time (the image-error renders excluded), the
-/// progress bar; whether the time budget is spent and a checkpoint due.
-struct Recorder<'a> {
-    task: &'a Task,
-    s: &'a Settings,
-    reference: &'a Image,
-    /// The task's target, made once.
-    target: Vec<f64>,
-    snapshot_at: Vec<usize>,
-    snapshots: Vec<Vec<f64>>,
-    history: Vec<Row>,
-    optimisation_time: Duration,
-    last: Instant,
-    bar: ProgressBar,
-    /// The iteration count at which the next checkpoint is due.
-    checkpoint_at: Option<usize>,
-    /// Why the observer last stopped the loop.
-    why: Option<Why>,
-    /// The loss's count of its renders.
-    renders: &'a Cell<usize>,
-}
-
-impl<'a> Recorder<'a> {
-    fn new(
-        task: &'a Task,
-        s: &'a Settings,
-        reference: &'a Image,
-        start: &[f64],
-        show_progress: bool,
-        renders: &'a Cell<usize>,
-    ) -> Self {
-        Recorder {
-            task,
-            s,
-            reference,
-            target: task.target(),
-            // k * (iterations - 1) / 5 without overflow, whatever the count.
-            snapshot_at: (0..6u128)
-                .map(|k| (k * s.iterations.saturating_sub(1) as u128 / 5) as usize)
-                .collect(),
-            snapshots: vec![start.to_vec()],
-            // Not `iterations` rows ahead: a count near `usize::MAX` cannot be allocated.
-            history: Vec::with_capacity(s.iterations.min(1 << 16)),
-            optimisation_time: Duration::ZERO,
-            bar: progress_bar(task.name(), s.iterations, show_progress),
-            last: Instant::now(),
-            checkpoint_at: None,
-            why: None,
-            renders,
-        }
-    }
-
-    /// Takes up the record of a checkpoint.
-    fn resume(&mut self, c: &Checkpoint) {
-        self.history.clone_from(&c.history);
-        self.snapshots.clone_from(&c.snapshots);
-        self.optimisation_time = Duration::from_secs_f64(c.optimisation_seconds);
-        self.bar.set_position(c.history.len() as u64);
-    }
-
-    /// Starts timing again (after a checkpoint was written: its time is not the run's).
-    fn restart_clock(&mut self) {
-        self.last = Instant::now();
-    }
-
-    /// The optimisation time per iteration so far, seconds.
-    fn seconds_per_iteration(&self) -> f64 {
-        self.optimisation_time.as_secs_f64() / self.history.len().max(1) as f64
-    }
-
-    /// The loop's observer: records `step`; says whether the budget is spent and whether a
-    /// checkpoint is due.
-    fn observe(&mut self, step: &Step<'_>) -> (bool, bool) {
-        let s = self.s;
-        self.optimisation_time += self.last.elapsed();
-        let seconds = self.optimisation_time.as_secs_f64();
-        if self.snapshot_at[1..].contains(&step.iteration) {
-            self.snapshots.push(step.theta.to_vec());
-        }
-        let image_mse = s.records_image_error(step.iteration).then(|| {
-            self.task
-                .render(step.theta, s.seed, s.spp, s.view())
-                .mse(self.reference)
-        });
-        let eval_renders = self.history.last().map_or(0, |r| r.eval_renders);
-        self.history.push(Row {
-            iteration: step.iteration,
-            sigma: step.sigma,
-            loss: step.estimate.mean_value,
-            param_mse: self.task.param_mse_to(step.theta, &self.target),
-            image_mse,
-            renders: self.renders.get(),
-            eval_renders: eval_renders + usize::from(image_mse.is_some()),
-            seconds,
-        });
-        self.bar.set_message(format!(
-            "loss {:.3e}  sigma {:.3}",
-            step.estimate.mean_value, step.sigma
-        ));
-        self.bar.inc(1);
-        let over_budget = s.budget_seconds.is_some_and(|b| seconds >= b);
-        let checkpoint_due = self.checkpoint_at.is_some_and(|k| step.iteration + 1 >= k);
-        self.last = Instant::now();
-        (over_budget, checkpoint_due)
-    }
-
-    /// The history, the snapshots and the optimisation time so far.
-    fn parts(&self) -> (&[Row], &[Vec<f64>], Duration) {
-        (&self.history, &self.snapshots, self.optimisation_time)
-    }
-
-    /// The history, the snapshots and the optimisation time.
-    fn finish(self) -> (Vec<Row>, Vec<Vec<f64>>, Duration) {
-        self.bar.finish_and_clear();
-        (self.history, self.snapshots, self.optimisation_time)
     }
 }
 
@@ -675,21 +338,6 @@ struct Ended {
     renders: usize,
     stopped_early: bool,
     interrupted: bool,
-}
-
-/// The progress bar of a run (hidden unless `show`).
-fn progress_bar(name: &str, iterations: usize, show: bool) -> ProgressBar {
-    if !show {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(iterations as u64);
-    let style = ProgressStyle::with_template(
-        "{prefix:>10} [{elapsed_precise}] {bar:32} {pos}/{len} {msg} (ETA {eta})",
-    )
-    .unwrap_or_else(|_| ProgressStyle::default_bar());
-    bar.set_style(style);
-    bar.set_prefix(name.to_string());
-    bar
 }
 
 #[cfg(test)]

@@ -40,7 +40,7 @@ pub(super) fn write_outputs(
     let title = format!("{}: {}", task.name().to_uppercase(), s.label());
     report::plot(
         &dir.join("convergence.png"),
-        &Axes::log_y(&title, "iteration", "MSE"),
+        &Axes::log_y(&title, "iteration (a step of the method)", "MSE"),
         &[
             Series::line(
                 "image MSE",

@@ -2,7 +2,7 @@
 //!
 //! Seen from above under a constant sky, so only what the task needs is rendered: colour,
 //! position and the cubes' soft contact shadows. The cubes move every evaluation, so their
-//! small BVH is rebuilt per render (tens of microseconds, measured in benches/render.rs).
+//! small BVH is rebuilt per render (cheap beside the render: benches/render.rs times it).
 
 use glam::{Vec3, Vec3A};
 

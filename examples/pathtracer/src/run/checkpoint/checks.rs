@@ -1,0 +1,180 @@
+//! Whether a checkpoint's parts fit together, and whether it fits the run asked for.
+
+use std::path::Path;
+
+use super::{show, Checkpoint, CheckpointError, Progress};
+use crate::run::Settings;
+use crate::tasks::Task;
+
+impl Checkpoint {
+    /// Checks that the parts fit: the settings are usable, the state continues, the history
+    /// has one row per completed iteration, the points have one dimension.
+    pub(super) fn check_consistent(&self) -> Result<(), String> {
+        let s = &self.settings;
+        // The run's settings are those asked for, but for what a time budget plans: fewer
+        // pixels, spp or iterations.
+        let r = &self.requested;
+        let planned = Settings {
+            scale: r.scale,
+            spp: r.spp,
+            iterations: r.iterations,
+            eval_every: r.eval_every,
+            ..s.clone()
+        };
+        let fits = if r.budget_seconds.is_some() {
+            planned == *r && s.spp <= r.spp && s.iterations <= r.iterations
+        } else {
+            s == r
+        };
+        if !fits {
+            return Err("the run's settings are not those asked for".into());
+        }
+        if s.iterations == 0 || s.samples == 0 || s.spp == 0 || s.eval_every == 0 {
+            return Err("iterations, samples, spp and eval_every must be at least 1".into());
+        }
+        if s.samples > crate::run::MAX_SAMPLES {
+            return Err(format!(
+                "{} samples, at most {}",
+                s.samples,
+                crate::run::MAX_SAMPLES
+            ));
+        }
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if !positive(s.sigma0) || !positive(s.lr) || !positive(s.fd_step) {
+            return Err("sigma0, lr and fd_step must be finite and positive".into());
+        }
+        if s.scale
+            .is_some_and(|v| !positive(v) || v > crate::run::MAX_SCALE)
+            || s.fov_degrees.is_some_and(|v| !positive(v) || v >= 180.0)
+            || s.budget_seconds.is_some_and(|v| !positive(v))
+        {
+            return Err("scale, fov_degrees or budget_seconds is out of range".into());
+        }
+        let non_negative = self.optimisation_seconds >= 0.0 && self.render_seconds >= 0.0;
+        if !non_negative {
+            return Err("the times must be non-negative".into());
+        }
+        let done = self.history.len();
+        if done > s.iterations {
+            return Err(format!(
+                "{done} history rows for {} iterations",
+                s.iterations
+            ));
+        }
+        if let Some((i, row)) = self
+            .history
+            .iter()
+            .enumerate()
+            .find(|(i, r)| r.iteration != *i)
+        {
+            return Err(format!("history row {i} is iteration {}", row.iteration));
+        }
+        let dim = match &self.progress {
+            Progress::Loop { state } => {
+                state.validate().map_err(|e| e.to_string())?;
+                if state.iteration != done {
+                    return Err(format!(
+                        "the state is at iteration {}, the history has {done} rows",
+                        state.iteration
+                    ));
+                }
+                state.theta.len()
+            }
+            Progress::Adaptive {
+                values,
+                best_point,
+                bests,
+                best_value,
+                ..
+            } => {
+                if values.len() > s.samples.saturating_mul(s.iterations) {
+                    return Err(format!(
+                        "{} evaluations for a budget of {}",
+                        values.len(),
+                        s.samples.saturating_mul(s.iterations)
+                    ));
+                }
+                if values.is_empty() != (done == 0) {
+                    return Err("evaluations without history, or history without".into());
+                }
+                if best_value.is_some_and(|v| !v.is_finite()) {
+                    return Err("the best value is not finite".into());
+                }
+                if let Some(p) = bests.iter().find(|p| p.len() != best_point.len()) {
+                    return Err(format!(
+                        "a best point of dimension {}, the best has {}",
+                        p.len(),
+                        best_point.len()
+                    ));
+                }
+                best_point.len()
+            }
+        };
+        if let Some(p) = self.snapshots.iter().find(|p| p.len() != dim) {
+            return Err(format!(
+                "a snapshot of dimension {}, theta has {dim}",
+                p.len()
+            ));
+        }
+        if self.snapshots.len() > 6 {
+            return Err(format!("{} snapshots, at most 6", self.snapshots.len()));
+        }
+        if dim == 0 || self.snapshots.iter().flatten().any(|v| !v.is_finite()) {
+            return Err("theta is empty or a snapshot is not finite".into());
+        }
+        Ok(())
+    }
+
+    /// Checks that the checkpoint is a run of `task` with the settings `requested` (those
+    /// the command line asks for), naming the first setting that differs.
+    ///
+    /// # Errors
+    /// [`CheckpointError::Mismatch`] (or `Inconsistent` if the point's dimension is not the
+    /// task's).
+    pub fn check_matches(
+        &self,
+        task: &Task,
+        requested: &Settings,
+        path: &Path,
+    ) -> Result<(), CheckpointError> {
+        let mismatch = |setting: &str, found: String, here: String| CheckpointError::Mismatch {
+            path: path.into(),
+            setting: setting.into(),
+            found,
+            here,
+        };
+        if self.task != task.name() {
+            return Err(mismatch("task", self.task.clone(), task.name().into()));
+        }
+        let (Ok(serde_json::Value::Object(found)), Ok(serde_json::Value::Object(here))) = (
+            serde_json::to_value(&self.requested),
+            serde_json::to_value(requested),
+        ) else {
+            return Err(CheckpointError::Inconsistent {
+                path: path.into(),
+                reason: "the settings do not serialise".into(),
+            });
+        };
+        for (key, value) in &here {
+            let old = found.get(key).cloned().unwrap_or(serde_json::Value::Null);
+            if &old != value {
+                return Err(mismatch(key, show(&old), show(value)));
+            }
+        }
+        let dim = match &self.progress {
+            Progress::Loop { state } => state.theta.len(),
+            Progress::Adaptive { best_point, .. } => best_point.len(),
+        };
+        if dim != task.dim() {
+            return Err(CheckpointError::Inconsistent {
+                path: path.into(),
+                reason: format!(
+                    "theta has {dim} parameters, {} has {}",
+                    task.name(),
+                    task.dim()
+                ),
+            });
+        }
+        Ok(())
+    }
+}
