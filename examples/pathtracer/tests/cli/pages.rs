@@ -6,10 +6,10 @@ use crate::{fresh, refused_before_any_work, run};
 
 #[test]
 fn the_seeds_page_puts_studies_side_by_side() {
-    // The paper loop's committed seeds study (docs/results/seeds-paper), its SHADOW and CUP
-    // runs copied alone (summaries only): seeds 0-9 each, 8 and 2 of them at or below the
-    // paper's parameter MSE, 7 and 7 at or below its image MSE.
-    let committed = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/results/seeds-paper");
+    // The paper loop's SHADOW and CUP runs of the seeds study (`tests/data/seeds-paper`, their
+    // summaries and histories only): seeds 0-9 each, 8 and 2 of them at or below the paper's
+    // parameter MSE, 7 and 7 at or below its image MSE.
+    let committed = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/seeds-paper");
     let runs = fresh("seeds-runs");
     for task in ["shadow", "cup"] {
         for k in 0..10 {
@@ -23,7 +23,7 @@ fn the_seeds_page_puts_studies_side_by_side() {
                     committed.join(&name).join(file),
                     runs.join(&name).join(file),
                 )
-                .expect("the committed study has this run");
+                .expect("the test data has this run");
             }
         }
     }
