@@ -248,3 +248,11 @@ impl Adaptive {
         Ok(None)
     }
 }
+
+impl Adaptive {
+    /// Iterations and restarts so far, and the spread of the next generation.
+    pub(crate) fn progress(&self) -> (usize, usize, f64) {
+        let sigma = self.dist.as_ref().map_or(self.sigma0, |d| d.sigma);
+        (self.iterations, self.restarts, sigma)
+    }
+}
