@@ -23,15 +23,16 @@ use crate::run::Ask;
 ///
 /// ```
 /// use plateau_free::lifecycle::Driver;
-/// use plateau_free::{Error, Minimizer};
+/// use plateau_free::{Error, FailurePolicy, Minimizer};
 ///
-/// // f gives NaN from its 30th call on; the policy (the default) raises.
+/// // f gives NaN from its 30th call on, and the policy raises.
 /// let calls = std::sync::atomic::AtomicUsize::new(0);
 /// let f = |x: &[f64]| match calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed) {
 ///     0..29 => x[0] * x[0],
 ///     _ => f64::NAN,
 /// };
-/// let failure = Minimizer::new(f).budget(500).run_with(&[2.0], Driver::new()).unwrap_err();
+/// let m = Minimizer::new(f).budget(500).on_failure(FailurePolicy::Raise);
+/// let failure = m.run_with(&[2.0], Driver::new()).unwrap_err();
 /// assert!(matches!(failure.error, Error::NonFiniteValue { .. }));
 /// let so_far = failure.result.unwrap();
 /// assert!(so_far.fun < 4.0 && so_far.evaluations < 30);
