@@ -13,6 +13,9 @@ use plateau_free::{
     PlateauFreeGradient, Sparsity, Stop, Strategy,
 };
 
+/// A plain objective, as a function pointer (one type for every run of a test).
+type Plain = fn(&[f64]) -> f64;
+
 const PAPER: Strategy = Strategy::Paper {
     samples: 4,
     lr: 0.05,
@@ -39,8 +42,8 @@ fn strategies_of<F: plateau_free::Objective + Clone>(f: F, seed: u64) -> [Minimi
 }
 
 /// [`strategies_of`] Rosenbrock.
-fn strategies(seed: u64) -> [Minimizer<fn(&[f64]) -> f64>; 3] {
-    strategies_of(rosenbrock as fn(&[f64]) -> f64, seed)
+fn strategies(seed: u64) -> [Minimizer<Plain>; 3] {
+    strategies_of(rosenbrock as Plain, seed)
 }
 
 /// Triggers `interrupt` once the run has completed `at` iterations.
@@ -390,7 +393,7 @@ mod checkpoints {
     /// `m` from `x0` interrupted after `at` iterations with a checkpoint at `path`, then
     /// resumed from it to the end.
     fn interrupted_and_resumed(
-        m: &Minimizer<fn(&[f64]) -> f64>,
+        m: &Minimizer<Plain>,
         x0: &[f64],
         at: usize,
         path: &std::path::Path,
@@ -453,13 +456,13 @@ mod checkpoints {
     #[test]
     fn another_runs_checkpoint_is_a_clear_error() {
         let x0 = [0.5, 0.5];
-        let m = Minimizer::new(rosenbrock as fn(&[f64]) -> f64)
+        let m = Minimizer::new(rosenbrock as Plain)
             .budget(500)
             .seed(1);
         let path = path("other.json");
         m.run_with(&x0, Driver::new().checkpoint(Checkpoint::new(&path)))
             .unwrap();
-        let mismatch = |m: &Minimizer<fn(&[f64]) -> f64>, x0: &[f64]| {
+        let mismatch = |m: &Minimizer<Plain>, x0: &[f64]| {
             let failure = m
                 .run_with(x0, Driver::new().checkpoint(Checkpoint::new(&path)))
                 .unwrap_err();
@@ -474,7 +477,7 @@ mod checkpoints {
                 e => panic!("{e}"),
             }
         };
-        let seed_2 = Minimizer::new(rosenbrock as fn(&[f64]) -> f64)
+        let seed_2 = Minimizer::new(rosenbrock as Plain)
             .budget(500)
             .seed(2);
         let (field, saved, given) = mismatch(&seed_2, &x0);
@@ -484,7 +487,7 @@ mod checkpoints {
         );
         let (field, ..) = mismatch(&m, &[0.5, 0.6]);
         assert_eq!(field, "x0");
-        let other = Minimizer::new(rosenbrock as fn(&[f64]) -> f64)
+        let other = Minimizer::new(rosenbrock as Plain)
             .budget(600)
             .seed(1);
         assert_eq!(mismatch(&other, &x0).0, "budget");
