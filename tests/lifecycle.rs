@@ -456,9 +456,7 @@ mod checkpoints {
     #[test]
     fn another_runs_checkpoint_is_a_clear_error() {
         let x0 = [0.5, 0.5];
-        let m = Minimizer::new(rosenbrock as Plain)
-            .budget(500)
-            .seed(1);
+        let m = Minimizer::new(rosenbrock as Plain).budget(500).seed(1);
         let path = path("other.json");
         m.run_with(&x0, Driver::new().checkpoint(Checkpoint::new(&path)))
             .unwrap();
@@ -477,9 +475,7 @@ mod checkpoints {
                 e => panic!("{e}"),
             }
         };
-        let seed_2 = Minimizer::new(rosenbrock as Plain)
-            .budget(500)
-            .seed(2);
+        let seed_2 = Minimizer::new(rosenbrock as Plain).budget(500).seed(2);
         let (field, saved, given) = mismatch(&seed_2, &x0);
         assert_eq!(
             (field.as_str(), saved.as_str(), given.as_str()),
@@ -487,9 +483,7 @@ mod checkpoints {
         );
         let (field, ..) = mismatch(&m, &[0.5, 0.6]);
         assert_eq!(field, "x0");
-        let other = Minimizer::new(rosenbrock as Plain)
-            .budget(600)
-            .seed(1);
+        let other = Minimizer::new(rosenbrock as Plain).budget(600).seed(1);
         assert_eq!(mismatch(&other, &x0).0, "budget");
         let message = other
             .run_with(&x0, Driver::new().checkpoint(Checkpoint::new(&path)))
