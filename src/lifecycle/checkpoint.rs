@@ -114,6 +114,14 @@ impl Checkpoint {
 
     /// Written every `k` iterations instead of on a timer (and at every end; 0: only at the
     /// ends).
+    ///
+    /// ```
+    /// use plateau_free::lifecycle::{Checkpoint, CHECKPOINT_SECONDS};
+    /// let c = Checkpoint::new("run.json").every_iterations(100);
+    /// assert_eq!(c.path(), std::path::Path::new("run.json"));
+    /// assert!(!c.resumed());
+    /// assert_eq!(CHECKPOINT_SECONDS, 30.0);
+    /// ```
     #[must_use]
     pub fn every_iterations(mut self, k: usize) -> Checkpoint {
         self.every = Every::Iterations(k);

@@ -92,7 +92,7 @@ impl<R> From<Failure<R, Error>> for Error {
 /// ```
 pub struct Driver<'a> {
     interrupt: Option<Interrupt>,
-    observers: Vec<Box<dyn Observer + 'a>>,
+    observers: Vec<Box<dyn Observer + Send + 'a>>,
     workers: Workers,
     #[cfg(feature = "serde")]
     checkpoint: Option<Checkpoint>,
@@ -109,6 +109,12 @@ impl fmt::Debug for Driver<'_> {
         d.finish()
     }
 }
+
+/// A driver can be moved to another thread.
+const _: fn() = || {
+    fn send<T: Send>() {}
+    send::<Driver<'static>>();
+};
 
 impl Default for Driver<'_> {
     fn default() -> Self {
@@ -136,9 +142,10 @@ impl<'a> Driver<'a> {
     }
 
     /// Shows `observer` every iteration (observers are called in the order added). Pass
-    /// `&mut observer` to read it after the run.
+    /// `&mut observer` to read it after the run. Observers are `Send`, so that a driver can
+    /// run on another thread (the Python bindings run it with the interpreter released).
     #[must_use]
-    pub fn observe(mut self, observer: impl Observer + 'a) -> Self {
+    pub fn observe(mut self, observer: impl Observer + Send + 'a) -> Self {
         self.observers.push(Box::new(observer));
         self
     }
