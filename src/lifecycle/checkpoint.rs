@@ -219,7 +219,11 @@ impl Checkpoint {
     /// The run to drive: the file's, when it exists, else `fresh`.
     pub(crate) fn begin<M: AskAndTell>(&mut self, fresh: M) -> Result<M, Error> {
         self.last_save = Instant::now();
-        self.identity = Some(owned(fresh.identity()));
+        let identity = fresh.identity();
+        if identity.is_empty() {
+            return Err(self.error("this method's state cannot be saved".into()));
+        }
+        self.identity = Some(owned(identity));
         let saved = self.read(&fresh)?;
         self.resumed = saved.is_some();
         let run = saved.unwrap_or(fresh);

@@ -79,7 +79,8 @@ pub trait AskAndTell {
 
     /// The settings that make the run this run, by name, first the ones a user is likeliest
     /// to change: a checkpoint compares them before it resumes and names the first that
-    /// differs. Empty for a method that cannot be saved.
+    /// differs. Empty (the default) for a method that cannot be saved: a checkpoint
+    /// refuses it before the run begins.
     fn identity(&self) -> Vec<(&'static str, String)> {
         Vec::new()
     }
