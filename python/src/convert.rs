@@ -246,12 +246,22 @@ pub(crate) struct AdaptiveOptions {
     polish: Option<f64>,
     /// `Minimizer::stop_when_stalled`'s window, a fraction of the budget; None: off.
     stall: Option<f64>,
+    /// `'continue'` or `'raise'`: `Minimizer::on_failure`.
+    on_failure: String,
 }
 
 impl AdaptiveOptions {
     /// `minimizer` with these options; those given as None keep the Minimizer's defaults.
     pub(crate) fn apply<F>(self, minimizer: RsMinimizer<F>) -> RsMinimizer<F> {
-        let minimizer = minimizer.seed(self.seed).restarts(self.restarts);
+        let policy = if self.on_failure == "raise" {
+            FailurePolicy::Raise
+        } else {
+            FailurePolicy::Continue
+        };
+        let minimizer = minimizer
+            .seed(self.seed)
+            .restarts(self.restarts)
+            .on_failure(policy);
         let minimizer = maybe(minimizer, self.budget, RsMinimizer::budget);
         let minimizer = maybe(minimizer, self.sigma0, RsMinimizer::sigma0);
         let minimizer = maybe(minimizer, self.bounds, |m, (lower, upper)| {

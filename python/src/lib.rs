@@ -24,11 +24,11 @@ use numpy::{
 };
 use plateau_free::baseline::{FiniteDifference as RsFiniteDifference, Spsa as RsSpsa};
 use plateau_free::{
-    Adam as RsAdam, Annealer as RsAnnealer, Error, GradientEstimator, HistoryKeep,
+    Adam as RsAdam, Annealer as RsAnnealer, Error, FailurePolicy, GradientEstimator, HistoryKeep,
     Minimizer as RsMinimizer, Minimum as RsMinimum, Objective, Optimizer,
     PlateauFreeGradient as RsPlateauFreeGradient, Points, Sampling, Schedule, Stop, Strategy,
 };
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyFloat, PyInt, PyString, PyTuple, PyType};
 
@@ -73,7 +73,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyLeastSquares>()?;
     m.add_function(wrap_pyfunction!(_minimize, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_reference_estimates, m)?)?;
-    m.add_function(wrap_pyfunction!(_minimize_adaptive, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_reference_minimize, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_reference_minimize_adaptive, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_seconds_per_evaluation, m)?)?;

@@ -12,6 +12,9 @@ pub(crate) struct Record {
     pub(crate) nfev: Vec<u64>,
     pub(crate) x: Vec<f64>,
     pub(crate) stopped_by_callback: bool,
+    /// Whether Ctrl-C (a `KeyboardInterrupt`) ended the run.
+    #[serde(default)]
+    pub(crate) interrupted: bool,
     /// The oldest iterations no longer held (a file without it has dropped none).
     #[serde(default)]
     pub(crate) dropped: usize,
@@ -83,6 +86,7 @@ impl Record {
     ) -> PyResult<()> {
         let held = self.sigma.len();
         out.set_item("stopped_by_callback", self.stopped_by_callback)?;
+        out.set_item("interrupted", self.interrupted)?;
         out.set_item("dropped", self.dropped)?;
         out.set_item("sigma", self.sigma.into_pyarray(py))?;
         out.set_item("grad_norm", self.grad_norm.into_pyarray(py))?;
@@ -264,8 +268,9 @@ pub(crate) fn run<G: GradientEstimator + Send + ?Sized>(
     let restored = loaded.as_ref().map_or(0, |(state, _)| state.iteration);
     let (mut state, mut record) = match loaded {
         Some((state, mut record)) => {
-            // A run the callback stopped goes on when called again.
+            // A run the callback or Ctrl-C stopped goes on when called again.
             record.stopped_by_callback = false;
+            record.interrupted = false;
             (state, record)
         }
         None => (
@@ -359,17 +364,26 @@ pub(crate) fn run<G: GradientEstimator + Send + ?Sized>(
                 let state = *run_error.state;
                 record.truncate(state.iteration, dim);
                 save(&state, &record)?;
-                return match shared.finish(Err::<(), _>(run_error.error)) {
-                    Err(e) => Err(e),
-                    Ok(()) => Err(PyValueError::new_err("the run failed")),
+                let err = match shared.finish(Err::<(), _>(run_error.error)) {
+                    Err(e) => e,
+                    Ok(()) => PyValueError::new_err("the run failed"),
                 };
+                if !err.is_instance_of::<PyKeyboardInterrupt>(py) {
+                    return Err(err);
+                }
+                // Ctrl-C: the run ends with the last completed iteration.
+                record.interrupted = true;
+                state
             }
         };
         if let Some(err) = callback_error {
             save(&state, &record)?;
-            return Err(err);
+            if !err.is_instance_of::<PyKeyboardInterrupt>(py) {
+                return Err(err);
+            }
+            record.interrupted = true;
         }
-        if checkpoint_due && !record.stopped_by_callback {
+        if checkpoint_due && !record.stopped_by_callback && !record.interrupted {
             save(&state, &record)?;
             continue;
         }
