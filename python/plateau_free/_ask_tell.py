@@ -119,7 +119,8 @@ class AskTell:
         """
         array = _told(values)
         asked = self._asked
-        if asked is not None and array.size == len(asked) and self._policy == "raise":
+        final = bool(self._raw.final_asked)
+        if asked is not None and array.size == len(asked) and (self._policy == "raise" or final):
             # Refused here for every ask (the Rust side refuses them too, but for the paper
             # loop's final point).
             bad = np.flatnonzero(~np.isfinite(array))
@@ -160,7 +161,7 @@ class AskTell:
             result = _adaptive_result(raw, self._budget)
         else:
             result = _paper_result(raw, raw["final_value"])
-        result.update(nfail=int(raw.get("failures", 0)), seed=self._seed)
+        result.update(nfail=int(raw.get("failures", 0)), seed=self._seed, from_checkpoint=False)
         return result
 
     def __repr__(self) -> str:

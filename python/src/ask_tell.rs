@@ -66,13 +66,17 @@ impl Paper {
                     got: values.len(),
                 }));
             }
-            // As `plateau_free.minimize`'s final evaluation: a NaN or an infinity is refused.
+            // `result.fun` is this value: a NaN or an infinity is refused under every
+            // failure policy (there is no other point to rank it against).
             if !values[0].is_finite() {
-                return Err(value_error(Error::NonFiniteValue {
+                let error = Error::NonFiniteValue {
                     sample: self.run.history().evaluations,
                     value: values[0],
                     point: self.run.theta().to_vec(),
-                }));
+                };
+                return Err(PyValueError::new_err(format!(
+                    "{error}: tell finite values (the final evaluation must be finite)"
+                )));
             }
             self.final_value = Some(values[0]);
             self.final_asked = false;
@@ -251,6 +255,13 @@ impl PyAskTell {
             Run::Adaptive(run) => run.is_done(),
             Run::Paper(p) => p.is_done(),
         })
+    }
+
+    /// Whether the asked point is the paper loop's final evaluation (its value is
+    /// `result.fun`, and must be finite).
+    #[getter]
+    fn final_asked(&self, py: Python<'_>) -> PyResult<bool> {
+        Ok(matches!(&*self.run.lock(py)?, Run::Paper(p) if p.final_asked))
     }
 
     /// Evaluations told so far.

@@ -45,8 +45,8 @@ def assert_same_result(told, called):
             assert told[key].shape == called[key].shape
         else:
             assert told[key] == called[key], key
-    if called.history is None:
-        assert told.history is None
+    if told.history is None:  # the adaptive search: minimize's driver keeps the history
+        assert called.history is None or isinstance(called.history, plateau_free.SearchHistory)
         return
     for field in ("sigma", "grad_norm", "fun", "nfev"):
         np.testing.assert_array_equal(getattr(told.history, field), getattr(called.history, field))
