@@ -32,8 +32,8 @@ use crate::run::Stop;
 /// ```
 ///
 /// # Errors
-/// An empty or non-finite `x0`, a zero budget, or `f` returning NaN or an infinity
-/// ([`Error::NonFiniteValue`], with the point).
+/// An empty or non-finite `x0`, or a zero budget. A NaN or an infinity from `f` is a failed
+/// point, ranked below every finite value and counted in [`Minimum::failures`].
 pub fn minimize<F: Fn(&[f64]) -> f64>(f: F, x0: &[f64], budget: usize) -> Result<Minimum, Error> {
     Minimizer::new(f).budget(budget).run(x0)
 }
@@ -234,10 +234,12 @@ impl<F> Minimizer<F> {
         /// ```
         /// use plateau_free::{Minimizer, Stop, STALL_WINDOW};
         ///
-        /// // A floor: every point with |x| < 1 is as good as the optimum.
+        /// // A floor: every point with |x| < 1 is as good as the optimum. (Without the
+        /// // patience rule, which would end this run first.)
         /// let f = |x: &[f64]| (x[0].abs() - 1.0).max(0.0);
         /// let best = Minimizer::new(f)
         ///     .budget(5000)
+        ///     .patience(0)
         ///     .stop_when_stalled(STALL_WINDOW)
         ///     .run(&[8.0])?;
         /// assert_eq!(best.stop, Stop::Stalled);

@@ -39,9 +39,14 @@ pub(crate) struct Polished {
     final_asked: bool,
     /// The adaptive search after the loop ([`Minimizer::polish`]), once it has begun.
     polish: Option<Box<Adaptive>>,
-    /// The loop ended before its schedule: an estimate failed beyond its redraws.
+    /// The loop ended before its schedule: an estimate failed beyond its redraws, or the
+    /// redraws spent its share of the budget.
     #[cfg_attr(feature = "serde", serde(default))]
     loop_ended: bool,
+    /// The loop's share of the budget (the final evaluation included) and the evaluations
+    /// of one estimate: an estimate is asked only while it fits.
+    #[cfg_attr(feature = "serde", serde(default))]
+    share: Option<(usize, usize)>,
 }
 
 impl Polished {
@@ -88,6 +93,7 @@ impl Polished {
             final_asked: false,
             polish: None,
             loop_ended: false,
+            share: Some((budget, samples)),
         })
     }
 
@@ -127,11 +133,20 @@ impl Polished {
         if let Some(polish) = &mut self.polish {
             return polish.ask(ledger).map(Some);
         }
+        // Redraws of failed estimates spend evaluations the schedule did not plan: the loop
+        // ends when the next estimate and the final evaluation no longer fit its share.
+        let fits = |(share, samples): (usize, usize)| ledger.evaluations + samples < share;
         if !self.loop_ended && self.run.as_ref().is_some_and(|run| !run.is_done()) {
-            return match &mut self.run {
-                Some(run) => run.ask(),
-                None => Ok(None),
-            };
+            if self.share.is_none_or(fits) {
+                return match &mut self.run {
+                    Some(run) => run.ask(),
+                    None => Ok(None),
+                };
+            }
+            self.loop_ended = true;
+            if let Some(sigma) = self.run.as_ref().and_then(PaperAskTell::sigma) {
+                self.sigma = sigma;
+            }
         }
         if self.final_asked {
             return Err(Error::AskPending);
