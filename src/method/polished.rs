@@ -236,3 +236,14 @@ impl Polished {
         None
     }
 }
+
+impl Polished {
+    /// Iterations and restarts so far, and the spread of the next iteration.
+    pub(crate) fn progress(&self) -> (usize, usize, f64) {
+        match (&self.polish, &self.run) {
+            (Some(polish), _) => polish.progress(),
+            (None, Some(run)) => (run.iteration(), 0, run.sigma().unwrap_or(self.sigma)),
+            (None, None) => (0, 0, self.sigma),
+        }
+    }
+}

@@ -304,3 +304,11 @@ fn start_spread(o: &Options, x0: &[f64]) -> (f64, Vec<f64>) {
         (o.sigma0.unwrap_or(1.0), vec![1.0; n])
     }
 }
+
+impl Adaptive {
+    /// Iterations and restarts so far, and the spread of the next generation.
+    pub(crate) fn progress(&self) -> (usize, usize, f64) {
+        let sigma = self.dist.as_ref().map_or(self.sigma0, |d| d.sigma);
+        (self.iterations, self.restarts, sigma)
+    }
+}
