@@ -258,7 +258,7 @@ def _seed(name: str, value: Any) -> int:
 def _spread(name: str, value: Any) -> Union[float, list[float]]:
     """``sigma0``: a finite number > 0, or a sequence of them (one per coordinate of ``x0``:
     the caller checks the length)."""
-    if _is_real(value) or isinstance(value, (str, bytes)) or value is None or _is_bool(value):
+    if isinstance(value, (str, bytes)) or value is None or np.ndim(value) == 0:
         return _positive(name, value)
     must = f"{name} = {_show(value)} must be a finite number > 0, or one per coordinate of x0"
     try:

@@ -11,6 +11,7 @@ __version__: str
 PAPER_SIGMA_MIN: float
 PAPER_WARMUP: float
 STALL_WINDOW: float
+DEFAULT_POLISH: float
 
 _ArrayLike = npt.ArrayLike
 _FloatArray = npt.NDArray[np.float64]

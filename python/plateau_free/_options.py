@@ -38,6 +38,7 @@ from ._checks import (
     _window,
     _workers,
 )
+from ._native import DEFAULT_POLISH as _DEFAULT_POLISH
 from ._native import PAPER_SIGMA_MIN, Adam, Annealer
 from ._types import _Bounds, _SamplingName, _ScheduleName
 
@@ -66,6 +67,7 @@ class Options(TypedDict, total=False):
     target: Optional[float]
     population: Optional[int]
     restarts: Optional[bool]
+    patience: Optional[int]
     polish: Optional[float]
     stop_when_stalled: Optional[float]
     iterations: Optional[int]
@@ -190,6 +192,11 @@ _OPTIONS: dict[str, _Option] = {
     "restarts": _row(_flag, _SEARCH, "bool, optional", """
         Adaptive, polished: restart from the best point with a doubled population when a run
         converges or stalls while budget remains (default True)."""),
+    "patience": _row(_counter(0, " of restarts"), _SEARCH, "int, optional", """
+        Adaptive, polished: how many restarts in a row must converge back at the best point
+        seen before them for the run to be done before its budget (status 0, ``success``
+        True, the message says so); default 1 (``Minimizer::patience``); 0: the budget, the
+        target or the stall rule alone end the run."""),
     "polish": _row(_fraction, frozenset({"polished"}), "float, optional", """
         Polished: the fraction of ``budget``, in ``[0, 1)``, that the adaptive search gets
         after the paper's loop (default 0.5, as the Rust ``Minimizer`` and the path tracer;
@@ -232,10 +239,6 @@ _OPTIONS: dict[str, _Option] = {
         True; it counts in ``nfev`` and ``budget``). False: ``result.fun`` is the last
         iteration's mean value."""),
 }  # fmt: skip
-
-# The share of the budget the polish gets by default, as the Rust Minimizer's and the path
-# tracer's.
-_DEFAULT_POLISH = 0.5
 
 # The options whose None is a bad value, not "not given" (seed: None is fresh entropy).
 _ALWAYS_CHECKED = ("seed", "batched", "seeded")
@@ -425,6 +428,7 @@ def _adaptive_options(
         "polish": polish,
         "stall": checked.get("stop_when_stalled"),
         "on_failure": checked.get("on_failure", "continue"),
+        "patience": checked.get("patience"),
     }
 
 

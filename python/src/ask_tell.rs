@@ -284,11 +284,10 @@ impl PyAskTell {
         }
     }
 
-    /// The adaptive search's overall spread now (NaN for the paper's loop and before the
-    /// search has one).
+    /// The adaptive search's overall spread now (NaN for the paper's loop).
     fn sigma(&self, py: Python<'_>) -> PyResult<f64> {
         Ok(match &*self.run.lock(py)? {
-            Run::Adaptive(run) => adaptive_sigma(run),
+            Run::Adaptive(run) => run.sigma(),
             Run::Paper(_) => f64::NAN,
         })
     }
@@ -362,10 +361,6 @@ fn paper_dict<'py>(py: Python<'py>, p: &Paper, shape: &[usize]) -> PyResult<Boun
     Ok(out)
 }
 
-/// The adaptive search's overall spread, if the library tells it.
-fn adaptive_sigma(_run: &RsAskTell) -> f64 {
-    f64::NAN
-}
 
 /// `on_failure` for the paper loop's estimator: `'continue'` redraws an estimate with a
 /// failed point (up to [`FAILURE_REDRAWS`] times), `'raise'` ends the run.
@@ -381,5 +376,6 @@ fn estimate_on_failure(policy: &str) -> PyResult<plateau_free::OnFailure> {
     }
 }
 
-/// The redraws of one estimate that the paper's loop makes under `on_failure='continue'`.
-const FAILURE_REDRAWS: usize = 20;
+/// The redraws of one estimate that the paper's loop makes under `on_failure='continue'`:
+/// as many as `method='polished'`'s loop makes.
+const FAILURE_REDRAWS: usize = 10;

@@ -235,6 +235,8 @@ pub(crate) struct AdaptiveOptions {
     budget: Option<usize>,
     seed: u64,
     sigma0: Option<f64>,
+    /// One spread per coordinate: `Minimizer::sigma0_each`.
+    sigma0_each: Option<Vec<f64>>,
     bounds: Option<Bounds>,
     target: Option<f64>,
     population: Option<usize>,
@@ -248,6 +250,8 @@ pub(crate) struct AdaptiveOptions {
     stall: Option<f64>,
     /// `'continue'` or `'raise'`: `Minimizer::on_failure`.
     on_failure: String,
+    /// `Minimizer::patience`: converged restarts back at the best point that end the run.
+    patience: Option<usize>,
 }
 
 impl AdaptiveOptions {
@@ -264,6 +268,8 @@ impl AdaptiveOptions {
             .on_failure(policy);
         let minimizer = maybe(minimizer, self.budget, RsMinimizer::budget);
         let minimizer = maybe(minimizer, self.sigma0, RsMinimizer::sigma0);
+        let minimizer = maybe(minimizer, self.sigma0_each, RsMinimizer::sigma0_each);
+        let minimizer = maybe(minimizer, self.patience, RsMinimizer::patience);
         let minimizer = maybe(minimizer, self.bounds, |m, (lower, upper)| {
             m.bounds(lower, upper)
         });

@@ -79,5 +79,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("PAPER_SIGMA_MIN", plateau_free::PAPER_SIGMA_MIN)?;
     m.add("PAPER_WARMUP", plateau_free::PAPER_WARMUP)?;
     m.add("STALL_WINDOW", plateau_free::STALL_WINDOW)?;
+    m.add("DEFAULT_POLISH", plateau_free::DEFAULT_POLISH)?;
     Ok(())
 }

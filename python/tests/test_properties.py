@@ -335,7 +335,7 @@ def test_minimize_with_an_objective_that_raises_or_returns_non_numbers(method, b
             raise boom
         return bad_batch(what, len(x)) if batched else what
 
-    options = dict(budget=40, seed=seed, batched=batched, seeded=seeded)
+    options = dict(budget=40, seed=seed, batched=batched, seeded=seeded, on_failure="raise")
     if method == "polished":
         options["polish"] = 0.5
     result, error = None, None
@@ -479,9 +479,10 @@ MISTAKES = ["ask again", "shorter", "longer", "nothing", "nan", "inf", "none", "
 
 
 def make_run(method, x0, seed):
+    """A run that refuses non-finite values (``on_failure='raise'``), to test the refusals."""
     if method == "plateau":
-        return plateau_free.ask_tell(x0, method=method, iterations=6, seed=seed)
-    return plateau_free.ask_tell(x0, method=method, budget=40, seed=seed)
+        return plateau_free.ask_tell(x0, method=method, iterations=6, seed=seed, on_failure="raise")
+    return plateau_free.ask_tell(x0, method=method, budget=40, seed=seed, on_failure="raise")
 
 
 def make_mistake(es, mistake, X):
