@@ -11,6 +11,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _native
+from ._checks import _show
 from ._native import OptionTypeError, PlateauFreeGradient
 from ._options import (
     Options,
@@ -19,7 +20,6 @@ from ._options import (
     _options_doc,
     _PaperOptions,
     _polished_options,
-    _show,
 )
 from ._result import OptimizeResult, _adaptive_result, _paper_result
 from ._types import _FloatArray

@@ -267,7 +267,8 @@ def _spread(name: str, value: Any) -> Union[float, list[float]]:
         raise OptionTypeError(f"{must}: {e}") from e
     if array.size == 0 or not bool(np.all(np.isfinite(array) & (array > 0))):
         raise ValueError(must)
-    return cast(list[float], array.tolist())
+    spreads: list[float] = array.tolist()
+    return spreads
 
 
 _POLICIES = ("continue", "raise")

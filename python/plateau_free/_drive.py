@@ -167,7 +167,7 @@ class _Driver:
         if self.checkpoint is None or self.every == 0:
             return False
         if self.every is not None:
-            return self.progress.nit - self.saved_at[1] >= self.every
+            return bool(self.progress.nit - self.saved_at[1] >= self.every)
         return time.monotonic() - self.saved_at[0] >= _CHECKPOINT_SECONDS
 
     def drive(self) -> OptimizeResult:

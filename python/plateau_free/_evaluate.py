@@ -155,7 +155,7 @@ class _Evaluator:
             else:
                 raw = self.fun(batch, *self.args)
         except Exception as e:
-            self._raised(e)
+            self._raised(e, len(points))
             return np.full(len(points), math.nan)
         return _batch_values(raw, len(points))
 
@@ -165,9 +165,11 @@ class _Evaluator:
             return math.nan
         return _real_value(value)
 
-    def _raised(self, error: Exception) -> None:
+    def _raised(self, error: Exception, points: int = 1) -> None:
+        """``fun`` raised ``error`` on ``points`` points: raised again under ``'raise'``, else
+        counted (the first kept)."""
         if self.raise_failures:
             raise error
-        self.exceptions += 1
+        self.exceptions += points
         if self.first_error is None:
             self.first_error = error

@@ -16,7 +16,8 @@ from ._ask_tell import _native_run
 from ._drive import _drive
 from ._evaluate import _Evaluator, _real_value
 from ._native import FiniteDifference, Spsa
-from ._options import Options, _check_call, _options_doc, _PaperOptions, _show
+from ._checks import _show
+from ._options import Options, _check_call, _options_doc, _PaperOptions
 from ._result import OptimizeResult, _paper_result, _wants_intermediate_result
 from ._saved import _Checkpoint, _settings
 from ._types import _FloatArray

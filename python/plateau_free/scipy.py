@@ -28,7 +28,7 @@ from typing import Any, Callable, Optional, Sequence
 
 from ._minimize import minimize
 from ._options import _OPTIONS as _MINIMIZE_OPTIONS
-from ._options import _show
+from ._checks import _show
 
 
 def method(

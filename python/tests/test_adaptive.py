@@ -240,5 +240,5 @@ def test_keyboard_interrupt_stops_the_adaptive_run_within_one_call():
 
     # `sum` runs no bytecode: the driver sees the signal between calls.
     with interrupted_within(5.0) as run:
-        run.result = plateau_free.minimize(sum, [0.5, 0.5], budget=10**9, bounds=(-1.0, 1.0))
+        run.result = plateau_free.minimize(sum, [0.5, 0.5], budget=10**9, bounds=(-1.0, 1.0), patience=0)
     assert run.result.status == 2
