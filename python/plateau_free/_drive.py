@@ -24,9 +24,10 @@ from ._result import (
 )
 from ._saved import _Checkpoint
 
-# Seconds between progress lines (disp=True), and between checkpoints by default.
-_DISPLAY_SECONDS = 5.0
-_CHECKPOINT_SECONDS = 30.0
+# Seconds between progress lines (disp=True), and between checkpoints by default: the
+# library's.
+_DISPLAY_SECONDS = _native.PROGRESS_SECONDS
+_CHECKPOINT_SECONDS = _native.CHECKPOINT_SECONDS
 
 
 class _Progress:

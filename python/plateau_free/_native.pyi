@@ -12,6 +12,8 @@ PAPER_SIGMA_MIN: float
 PAPER_WARMUP: float
 STALL_WINDOW: float
 DEFAULT_POLISH: float
+CHECKPOINT_SECONDS: float
+PROGRESS_SECONDS: float
 
 _ArrayLike = npt.ArrayLike
 _FloatArray = npt.NDArray[np.float64]
@@ -173,15 +175,19 @@ class Adam:
 __all__ = [
     "Adam",
     "Annealer",
+    "CHECKPOINT_SECONDS",
+    "DEFAULT_POLISH",
     "FiniteDifference",
     "OptionTypeError",
     "PAPER_SIGMA_MIN",
     "PAPER_WARMUP",
+    "PROGRESS_SECONDS",
     "PlateauFreeGradient",
     "STALL_WINDOW",
     "Spsa",
     "_AskTell",
     "_minimize",
+    "_replace_file",
     "_rust_reference_estimates",
     "_rust_reference_minimize",
     "_rust_reference_minimize_adaptive",
@@ -299,4 +305,5 @@ def _rust_reference_minimize_adaptive(
     paper: tuple[int, float, float] | None = None,
     polish: float | None = None,
 ) -> dict[str, Any]: ...
+def _replace_file(path: str, data: bytes) -> None: ...
 def _rust_seconds_per_evaluation(dim: int = 10, samples: int = 10000, repeats: int = 5) -> float: ...

@@ -152,14 +152,15 @@ _OPTIONS: dict[str, _Option] = {
         loop). The paper's loop passes ``x``, ``fun`` (the iteration's mean value), ``nit``,
         ``nfev``, ``sigma`` and ``jac`` (the gradient estimate); adaptive the best ``x`` and
         ``fun`` so far, with ``nit`` and ``nfev``.""", ask_tell=False),
-    "on_failure": _row(_policy, _ALL, "'continue' or 'raise'", """
+    "on_failure": _row(_policy, _DRIVEN, "'continue' or 'raise'", """
         What a failed evaluation does: NaN, an infinity, or an exception raised by ``fun``
         (an ``Exception``; Ctrl-C is not a failure). ``'continue'`` (default): the point
         ranks below every finite value (the paper's loop redraws the estimate), the run goes
         on and ``result.nfail`` counts it; a run whose every evaluation raised raises the
         first exception. ``'raise'``: the run ends with the exception (a ValueError for NaN
         or an infinity) and ``exc.result`` holds the result so far, its best point
-        included."""),
+        included. Not an option of the baselines (``'fd'``, ``'spsa'``), which end on the
+        first failure."""),
     "workers": _row(_workers, _DRIVEN, "int, Executor or callable, optional", """
         Where an iteration's points are evaluated: a number of threads, a
         ``concurrent.futures.Executor`` (its ``map``), or a map-like callable

@@ -9,8 +9,6 @@ import functools
 import hashlib
 import json
 import math
-import os
-import tempfile
 from typing import Any, Callable, Optional
 
 import numpy as np
@@ -105,7 +103,7 @@ class _Checkpoint:
         return payload
 
     def save(self, payload: dict[str, Any]) -> None:
-        """Replaces the file atomically: a temporary file in the same folder, fsync, rename."""
+        """Replaces the file atomically (the library's ``replace_file``)."""
         text = _compact(
             {
                 "format": _FORMAT,
@@ -115,20 +113,7 @@ class _Checkpoint:
                 "payload": payload,
             }
         )
-        folder = os.path.dirname(os.path.abspath(self.path))
-        handle, temporary = tempfile.mkstemp(
-            prefix=f".{os.path.basename(self.path)}.", suffix=".tmp", dir=folder
-        )
-        try:
-            with os.fdopen(handle, "w") as file:
-                file.write(text)
-                file.flush()
-                os.fsync(file.fileno())
-            os.replace(temporary, self.path)
-        except BaseException:
-            if os.path.exists(temporary):
-                os.remove(temporary)
-            raise
+        _native._replace_file(self.path, text.encode())
 
 
 # The options that do not change what a run computes: left out of the settings a resumed run

@@ -54,6 +54,20 @@ use paper_loop::*;
 use reference::*;
 use schedule::*;
 
+/// Replaces the file `path` by `data` atomically (the library's `replace_file`: a temporary
+/// file beside it, fsync, rename); on error the file is as before. `plateau_free.minimize`'s
+/// checkpoint files are written with it.
+#[pyfunction]
+fn _replace_file(py: Python<'_>, path: std::path::PathBuf, data: Vec<u8>) -> PyResult<()> {
+    py.detach(|| plateau_free::lifecycle::replace_file(&path, &data))
+        .map_err(|e| {
+            pyo3::exceptions::PyOSError::new_err(format!(
+                "checkpoint {} not written: {e}",
+                path.display()
+            ))
+        })
+}
+
 /// The Rust extension of the Python package `plateau-free`; use `import plateau_free`.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -80,5 +94,11 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("PAPER_WARMUP", plateau_free::PAPER_WARMUP)?;
     m.add("STALL_WINDOW", plateau_free::STALL_WINDOW)?;
     m.add("DEFAULT_POLISH", plateau_free::DEFAULT_POLISH)?;
+    m.add(
+        "CHECKPOINT_SECONDS",
+        plateau_free::lifecycle::CHECKPOINT_SECONDS,
+    )?;
+    m.add("PROGRESS_SECONDS", plateau_free::lifecycle::PROGRESS_SECONDS)?;
+    m.add_function(wrap_pyfunction!(_replace_file, m)?)?;
     Ok(())
 }

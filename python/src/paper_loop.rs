@@ -104,9 +104,6 @@ impl Record {
 /// The version of the checkpoint file's layout.
 const CHECKPOINT_FORMAT: u32 = 1;
 
-/// About every this many seconds a run with a checkpoint file writes it (by default).
-const CHECKPOINT_SECONDS: f64 = 30.0;
-
 /// The contents of a `minimize(..., checkpoint=path)` file.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct CheckpointFile {
@@ -125,7 +122,8 @@ struct CheckpointFile {
 /// Where a run keeps its checkpoint, how often, and with which settings.
 pub(crate) struct Checkpointing {
     path: std::path::PathBuf,
-    /// Every this many iterations; `None`: about every [`CHECKPOINT_SECONDS`]; `Some(0)`:
+    /// Every this many iterations; `None`: about every
+    /// [`plateau_free::lifecycle::CHECKPOINT_SECONDS`], the library's cadence; `Some(0)`:
     /// only at the end and when the run stops on an exception.
     every: Option<usize>,
     settings: serde_json::Value,
@@ -196,8 +194,7 @@ impl Checkpointing {
         Ok(Some((file.state, file.record)))
     }
 
-    /// Writes the file atomically: a temporary file in the same directory, fsync, rename,
-    /// fsync of the directory.
+    /// Writes the file atomically, with the library's `replace_file`.
     fn save(&self, state: &plateau_free::OptimizerState, record: &Record) -> PyResult<()> {
         let file = CheckpointFile {
             format: CHECKPOINT_FORMAT,
@@ -207,42 +204,13 @@ impl Checkpointing {
             record: record.clone(),
         };
         let bytes = serde_json::to_vec(&file).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        replace_file(&self.path, &bytes).map_err(|e| {
+        plateau_free::lifecycle::replace_file(&self.path, &bytes).map_err(|e| {
             pyo3::exceptions::PyOSError::new_err(format!(
                 "checkpoint {} not written: {e}",
                 self.path.display()
             ))
         })
     }
-}
-
-/// Replaces `path` by `bytes` atomically; on error `path` is as before and no temporary
-/// file is left.
-fn replace_file(path: &std::path::Path, bytes: &[u8]) -> std::io::Result<()> {
-    use std::io::Write;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => std::path::Path::new("."),
-    };
-    let name = path
-        .file_name()
-        .map_or_else(|| "checkpoint".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
-    let result = (|| {
-        let mut file = std::fs::File::create(&tmp)?;
-        file.write_all(bytes)?;
-        file.sync_all()?;
-        drop(file);
-        std::fs::rename(&tmp, path)?;
-        if let Ok(d) = std::fs::File::open(dir) {
-            let _ = d.sync_all();
-        }
-        Ok(())
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -296,7 +264,7 @@ pub(crate) fn run<G: GradientEstimator + Send + ?Sized>(
                 let k = if ran == 0 || per <= 0.0 {
                     1
                 } else {
-                    ((CHECKPOINT_SECONDS / per) as usize).max(1)
+                    ((plateau_free::lifecycle::CHECKPOINT_SECONDS / per) as usize).max(1)
                 };
                 Some(done + k)
             }

@@ -41,16 +41,15 @@ VALUES = dict(
     patience=2, args=(1,), on_failure="raise",
 )  # fmt: skip
 # Options that every method takes.
-EVERY = {"budget", "bounds", "callback", "checkpoint", "checkpoint_every", "keep_history", "args",
-         "on_failure"}  # fmt: skip
+EVERY = {"budget", "bounds", "callback", "checkpoint", "checkpoint_every", "keep_history", "args"}
 TAKES = {
     "adaptive": EVERY | {"sigma0", "target", "population", "restarts", "stop_when_stalled",
-                         "workers", "disp", "patience"},
+                         "workers", "disp", "patience", "on_failure"},
     "polished": EVERY | {"sigma0", "target", "population", "restarts", "polish", "lr", "samples",
-                         "stop_when_stalled", "workers", "disp", "patience"},
+                         "stop_when_stalled", "workers", "disp", "patience", "on_failure"},
     "plateau": EVERY | {"sigma0", "iterations", "lr", "samples", "sampling", "antithetic",
                         "annealer", "sigma_min", "orthogonal", "parallel", "record_x",
-                        "final_evaluation", "workers", "disp"},
+                        "final_evaluation", "workers", "disp", "on_failure"},
     "spsa": EVERY | {"sigma0", "iterations", "lr", "annealer", "sigma_min", "record_x",
                      "final_evaluation"},
     "fd": EVERY | {"iterations", "lr", "step", "record_x", "final_evaluation"},
