@@ -70,6 +70,12 @@ def _real_value(value: Any) -> float:
 def _batch_values(values: Any, count: int) -> _FloatArray:
     """The ``count`` values a batched ``fun`` returned: real numbers in a sequence or a 1-d
     array; TypeError for what is not real numbers, ValueError for another count."""
+    if (
+        isinstance(values, np.ndarray)
+        and values.dtype == np.float64
+        and values.shape == (count,)
+    ):
+        return values  # the usual case, taken as it is
     must = (
         f"batched fun must return {count} real numbers (one per row of its argument), it "
         f"returned {_show(values)}"

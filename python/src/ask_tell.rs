@@ -361,7 +361,6 @@ fn paper_dict<'py>(py: Python<'py>, p: &Paper, shape: &[usize]) -> PyResult<Boun
     Ok(out)
 }
 
-
 /// `on_failure` for the paper loop's estimator: `'continue'` redraws an estimate with a
 /// failed point (up to [`FAILURE_REDRAWS`] times), `'raise'` ends the run.
 fn estimate_on_failure(policy: &str) -> PyResult<plateau_free::OnFailure> {

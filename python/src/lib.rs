@@ -98,7 +98,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "CHECKPOINT_SECONDS",
         plateau_free::lifecycle::CHECKPOINT_SECONDS,
     )?;
-    m.add("PROGRESS_SECONDS", plateau_free::lifecycle::PROGRESS_SECONDS)?;
+    m.add(
+        "PROGRESS_SECONDS",
+        plateau_free::lifecycle::PROGRESS_SECONDS,
+    )?;
     m.add_function(wrap_pyfunction!(_replace_file, m)?)?;
     Ok(())
 }
