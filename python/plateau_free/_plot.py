@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 from typing import Any, Optional
 
 import numpy as np
@@ -29,7 +30,8 @@ def plot_history(result: OptimizeResult, ax: Optional[Any] = None) -> Any:
     if not isinstance(history, (History, SearchHistory)):
         raise ValueError("result has no history to plot (result.history is None)")
     try:
-        import matplotlib.pyplot as plt
+        # Imported by name: matplotlib is an optional extra, and typed or not as installed.
+        plt: Any = importlib.import_module("matplotlib.pyplot")
     except ImportError as e:
         raise ImportError(
             "plot_history needs matplotlib: pip install plateau-free[plot]"
