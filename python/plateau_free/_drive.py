@@ -41,6 +41,8 @@ class _Progress:
         self.dropped = 0
         self.keep = keep
         self.started_told = False  # whether the start (the first, lone point) was told
+        self.exceptions = 0  # failed evaluations that raised, and the first one's repr
+        self.first_error = ""
 
     def push(self, nfev: int, best: float, sigma: float) -> None:
         """One iteration's row; the oldest beyond the last ``keep`` go once twice as many are
@@ -62,12 +64,15 @@ class _Progress:
             "rows": self.rows,
             "dropped": self.dropped,
             "started_told": self.started_told,
+            "exceptions": self.exceptions,
+            "first_error": self.first_error,
         }
 
     def restore(self, saved: dict[str, Any]) -> None:
         self.nit, self.nfail = int(saved["nit"]), int(saved["nfail"])
         self.rows, self.dropped = list(saved["rows"]), int(saved["dropped"])
         self.started_told = bool(saved["started_told"])
+        self.exceptions, self.first_error = int(saved["exceptions"]), str(saved["first_error"])
 
     def history(self) -> SearchHistory:
         self.trim()
@@ -142,6 +147,8 @@ class _Driver:
             return False
         self.run = _native._AskTell._from_state(json.dumps(payload["state"]))
         self.progress.restore(payload["progress"])
+        self.evaluate.failures = self.progress.nfail  # counted over the whole run
+        self.evaluate.exceptions = self.progress.exceptions
         pending = payload.get("pending")
         if pending is not None:
             points = np.array(pending["points"], dtype=np.float64)
@@ -163,6 +170,13 @@ class _Driver:
         state = json.loads(self.run._state())
         self.checkpoint.save({"state": state, "progress": self.progress.state(), "pending": pending})
         self.saved_at = (time.monotonic(), self.progress.nit)
+
+    def _count_failures(self) -> None:
+        """The evaluator's counts into the progress (what a checkpoint keeps)."""
+        self.progress.nfail = self.evaluate.failures
+        self.progress.exceptions = self.evaluate.exceptions
+        if not self.progress.first_error and self.evaluate.first_error is not None:
+            self.progress.first_error = repr(self.evaluate.first_error)
 
     def _due(self) -> bool:
         if self.checkpoint is None or self.every == 0:
@@ -186,7 +200,7 @@ class _Driver:
                 values = self.evaluate(flat, seeds)
                 self.run.tell(values.tolist())
                 self.pending = None
-                self.progress.nfail = self.evaluate.failures
+                self._count_failures()
                 stop = self._after_tell()
                 if stop is not None:
                     break
@@ -284,10 +298,11 @@ class _Driver:
         result.update(nfail=nfail, seed=self.checked["seed"], from_checkpoint=self.loaded)
         if self.method != "plateau":
             result["history"] = self.progress.history()
-        if self.evaluate.first_error is not None:
+        self._count_failures()
+        if self.progress.first_error:
             result["message"] += (
-                f"; fun raised on {self.evaluate.exceptions} of {result['nfev']} evaluations, "
-                f"the first: {self.evaluate.first_error!r}"
+                f"; fun raised on {self.progress.exceptions} of {result['nfev']} evaluations, "
+                f"the first: {self.progress.first_error}"
             )
         if self.loaded and self.checkpoint is not None:
             path = self.checkpoint.path

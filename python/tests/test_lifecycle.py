@@ -6,6 +6,7 @@ checkpoints and workers for every method, each bit for bit the run left alone.""
 from __future__ import annotations
 
 import concurrent.futures
+import hashlib
 import math
 import re
 from pathlib import Path
@@ -288,6 +289,31 @@ def test_a_resumed_run_is_the_run_left_alone(tmp_path: Path, method: str, every:
     if method != "plateau":
         assert resumed.history.fun.tobytes() == alone.history.fun.tobytes()
     assert [p.name for p in tmp_path.iterdir()] == ["run.json"]
+
+
+class FailsByPoint(CtrlC):
+    """``rosenbrock`` failing at about one point in 13, chosen by the point itself (so that a
+    resumed run fails where the run left alone did): NaN or an exception, in turn."""
+
+    def __call__(self, x: np.ndarray) -> float:
+        value = super().__call__(x)
+        mark = int.from_bytes(hashlib.sha256(x.tobytes()).digest()[:4], "little")
+        if mark % 13 == 0:
+            raise RuntimeError("no convergence")
+        return math.nan if mark % 13 == 1 else value
+
+
+@pytest.mark.parametrize("method", ["adaptive", "plateau"])
+def test_a_resumed_run_counts_the_failures_of_the_whole_run(tmp_path: Path, method: str) -> None:
+    options = {**RUNS[method], "seed": 4}
+    alone = plateau_free.minimize(FailsByPoint(0), [0.0, 0.0], **options)
+    assert alone.nfail > 0
+    path = tmp_path / "run.json"
+    first = plateau_free.minimize(FailsByPoint(150), [0.0, 0.0], checkpoint=path, **options)
+    assert first.status == 2 and 0 < first.nfail < alone.nfail
+    resumed = plateau_free.minimize(FailsByPoint(0), [0.0, 0.0], checkpoint=path, **options)
+    same(resumed, alone)
+    assert resumed.message.endswith(alone.message)  # the exceptions counted over the whole run
 
 
 def test_a_checkpoint_of_another_run_is_refused(tmp_path: Path) -> None:
