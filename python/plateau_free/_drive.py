@@ -7,6 +7,7 @@ result so far as ``exc.result``."""
 from __future__ import annotations
 
 import json
+import math
 import sys
 import time
 from typing import Any, Optional
@@ -83,27 +84,39 @@ class _Progress:
 
 
 class _Display:
-    """``disp=True``: a plain line on stdout every few seconds and at the end."""
+    """``disp=True``: the library's progress line (``lifecycle::ProgressLine``'s words) on stdout
+    every few seconds and at the end, with the failures when there are any."""
 
-    def __init__(self, on: bool) -> None:
+    def __init__(self, on: bool, budget: Optional[int]) -> None:
         self.on = on
+        self.budget = budget
         self.started = time.monotonic()
-        self.last = self.started
+        self.last: Optional[float] = None
 
-    def line(self, nfev: int, best: Optional[float], nfail: int, end: str = "") -> None:
+    def line(self, nit: int, nfev: int, best: float, sigma: float, nfail: int, end: str = "") -> None:
         now = time.monotonic()
-        if not self.on or (not end and now - self.last < _DISPLAY_SECONDS):
+        if not self.on or (not end and self.last is not None and now - self.last < _DISPLAY_SECONDS):
             return
         self.last = now
-        value = "none yet" if best is None else f"{best:.6g}"
-        failed = f", {nfail} failed" if nfail else ""
-        tail = f": {end}" if end else ""
+        budget = "" if self.budget is None else f"/{self.budget}"
+        failed = f"  failed {nfail}" if nfail else ""
         print(
-            f"plateau_free: {nfev} evaluations, best {value}{failed}, "
-            f"{now - self.started:.1f} s{tail}",
+            f"{'end: ' if end else ''}iteration {nit}  evaluations {nfev}{budget}  best "
+            f"{_rust_e(best)}  sigma {_rust_e(sigma)}  elapsed {now - self.started:.1f} s{failed}"
+            + (f"  ({end})" if end else ""),
             file=sys.stdout,
             flush=True,
         )
+
+
+def _rust_e(value: float) -> str:
+    """``value`` as Rust's ``{:.3e}`` writes it (``1.234e-5``, ``0.000e0``, ``inf``, ``NaN``)."""
+    if math.isnan(value):
+        return "NaN"
+    if math.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    mantissa, exponent = f"{value:.3e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
 
 
 class _Driver:
@@ -131,7 +144,7 @@ class _Driver:
         self.checkpoint = checkpoint
         self.every = checked.get("checkpoint_every")
         self.progress = _Progress(int(checked.get("keep_history", 1_000_000)))
-        self.display = _Display(bool(checked.get("disp", False)))
+        self.display = _Display(bool(checked.get("disp", False)), budget if method != "plateau" else None)
         self.pending: Optional[tuple[Any, Any]] = None
         self.restored = 0
         self.loaded = False
@@ -245,7 +258,7 @@ class _Driver:
         if self.method != "plateau":
             sigma = self.run.sigma()
             self.progress.push(nfev, float("inf") if best is None else best[1], sigma)
-        self.display.line(nfev, None if best is None else best[1], self.progress.nfail)
+        self._show(nfev)
         if self.callback is None:
             return None
         if self.method == "plateau":
@@ -313,8 +326,24 @@ class _Driver:
                     f"continued from the checkpoint {path} at iteration {self.restored}: "
                     f"{result['message']}"
                 )
-        self.display.line(int(result["nfev"]), result["fun"], nfail, end=result["message"])
+        self._show(int(result["nfev"]), result)
         return result
+
+    def _show(self, nfev: int, result: Optional[OptimizeResult] = None) -> None:
+        """The progress line (``disp``): the best value so far (the paper's loop: the last
+        iteration's mean value) and the spread; at the end, the result's."""
+        if not self.display.on:
+            return
+        if self.method == "plateau":
+            step = self.run.last_step()
+            best, sigma = (math.inf, math.nan) if step is None else (step[3], step[2])
+        else:
+            found = self.run.best()
+            best, sigma = (math.inf if found is None else found[1]), self.run.sigma()
+        if result is not None:
+            best = float(result["fun"])
+        end = "" if result is None else str(result["message"])
+        self.display.line(self.progress.nit, nfev, best, sigma, self.progress.nfail, end)
 
 
 def _fresh_error_if_all_failed(result: OptimizeResult, evaluate: _Evaluator) -> None:

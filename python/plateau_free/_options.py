@@ -168,8 +168,9 @@ _OPTIONS: dict[str, _Option] = {
         process pool needs ``fun`` to pickle). The result is bit for bit the run of one
         worker (default 1: in this thread).""", ask_tell=False),
     "disp": _row(_flag, _DRIVEN, "bool, optional", """
-        Print a plain progress line (evaluations, best value, failures, time) every few
-        seconds and at the end (default False).""", ask_tell=False),
+        Print a plain progress line every few seconds and at the end, in the words of the
+        library's ``ProgressLine`` (iteration, evaluations of the budget, best value, spread,
+        time; failures when any; default False).""", ask_tell=False),
     "checkpoint": _row(_path, _ALL, "str or path, optional", """
         A file that keeps the run's state and what the run is (the method, ``x0``, the
         options, the seed, ``fun``'s ``module.qualname``). Written atomically every

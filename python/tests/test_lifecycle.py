@@ -233,8 +233,13 @@ def test_ctrl_c_returns_the_best_so_far(method: str) -> None:
 def test_disp_prints_a_plain_line(capsys: pytest.CaptureFixture[str]) -> None:
     result = plateau_free.minimize(rosenbrock, [0.0, 0.0], budget=200, disp=True)
     out = capsys.readouterr().out.strip().splitlines()
-    assert out and out[-1].startswith(f"plateau_free: {result.nfev} evaluations, best ")
-    assert out[-1].endswith(result.message)
+    # The library's line (lifecycle::ProgressLine): the first iteration, then the end.
+    assert out[0].startswith("iteration 1  evaluations ") and "/200  best " in out[0]
+    assert re.fullmatch(
+        rf"end: iteration {result.nit}  evaluations {result.nfev}/200  best \d\.\d{{3}}e-?\d+  "
+        rf"sigma \d\.\d{{3}}e-?\d+  elapsed \d+\.\d s  \({re.escape(result.message)}\)",
+        out[-1],
+    ), out[-1]
     plateau_free.minimize(rosenbrock, [0.0, 0.0], budget=200)
     assert capsys.readouterr().out == ""
 
