@@ -173,7 +173,7 @@ impl Method {
 
 /// Candidate settings of `minimize`, for `docs/convergence.md`: `PLATEAU_FREE_VARIANT` holds
 /// comma-separated `key=value` pairs (`mirrored=1`, `flat=0`, `metric=full|diagonal`,
-/// `sigma0=X`, `restarts=0`, `population=K`). Unset, the defaults.
+/// `sigma0=X`, `restarts=0`, `population=K`, `patience=K`). Unset, the defaults.
 fn variant<F: plateau_free::Objective>(
     mut m: plateau_free::Minimizer<F>,
 ) -> plateau_free::Minimizer<F> {
@@ -189,6 +189,7 @@ fn variant<F: plateau_free::Objective>(
             "from_best" => m.restart_from_best(v == "1"),
             "sigma0" => m.sigma0(v.parse().expect("sigma0")),
             "population" => m.population(v.parse().expect("population")),
+            "patience" => m.patience(v.parse().expect("patience")),
             "metric" => m.metric(match v {
                 "full" => plateau_free::Metric::Full,
                 "diagonal" => plateau_free::Metric::Diagonal,
