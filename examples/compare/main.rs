@@ -190,6 +190,7 @@ fn variant<F: plateau_free::Objective>(
             "sigma0" => m.sigma0(v.parse().expect("sigma0")),
             "population" => m.population(v.parse().expect("population")),
             "patience" => m.patience(v.parse().expect("patience")),
+            "target" => m.target(v.parse().expect("target")),
             "metric" => m.metric(match v {
                 "full" => plateau_free::Metric::Full,
                 "diagonal" => plateau_free::Metric::Diagonal,
