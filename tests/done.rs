@@ -29,7 +29,6 @@ fn the_staircase_stops_at_its_optimum_well_before_the_budget() {
             .seed(seed)
             .run(&[0.0; 3])
             .unwrap();
-        eprintln!("staircase seed {seed}: {best:?}");
         assert_eq!(best.fun, 0.0, "seed {seed}");
         assert_eq!(best.stop, Stop::Done, "seed {seed}: {best:?}");
         assert!(best.success());
@@ -48,7 +47,6 @@ fn a_sphere_and_its_huge_multiple_stop_with_success() {
                 .seed(seed)
                 .run(&[1.0; 5])
                 .unwrap();
-            eprintln!("sphere x {scale:e} seed {seed}: {best:?}");
             assert_eq!(best.stop, Stop::Done, "{scale:e} seed {seed}: {best:?}");
             assert!(best.evaluations < 3500, "{scale:e} seed {seed}: {best:?}");
             assert!(best.fun / scale < 1e-10, "{scale:e} seed {seed}: {best:?}");
@@ -78,7 +76,6 @@ fn rastrigin_restarts_past_its_first_local_optimum() {
             .seed(seed)
             .run(&[3.3; 5])
             .unwrap();
-        eprintln!("rastrigin seed {seed}: {best:?}");
         assert!(best.restarts >= 2, "seed {seed}: {best:?}");
     }
 }

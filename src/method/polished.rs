@@ -18,11 +18,12 @@ use crate::{Minimizer, Strategy};
 /// Mixed into the seed for the polish's random stream, so that it is not the loop's.
 const POLISH_STREAM: u64 = 0x706f_6c69_7368_0001;
 
-/// Under [`FailurePolicy::Continue`], how many times an estimate with a failed point (NaN or
-/// an infinity) is redrawn before the loop ends at its last iterate (and the polish, if
-/// any, goes on from the best point): a loop whose estimates keep failing stands where `f`
-/// fails around it, and the adaptive search, which ranks failures, is the better tool there.
-pub const FAILURE_REDRAWS: usize = 10;
+/// Under [`FailurePolicy::Continue`], how many times an estimate whose every point failed
+/// (NaN or an infinity) is redrawn before the loop ends at its last iterate (and the polish,
+/// if any, goes on from the best point): a loop whose estimates keep failing stands where
+/// `f` fails all around it, and the adaptive search, which ranks failures, is the better
+/// tool there.
+pub(crate) const FAILURE_REDRAWS: usize = 10;
 
 /// [`Strategy::Paper`] between asks: the loop, one evaluation at its last iterate, then the
 /// polish, if any.
@@ -190,7 +191,8 @@ impl Polished {
             return Err(Error::NothingAsked);
         };
         let sigma = run.sigma().unwrap_or(self.sigma);
-        match run.tell(values) {
+        let ranked = ranked_values(&ledger.options, values, run.core.seeds());
+        match run.tell(ranked.as_deref().unwrap_or(values)) {
             Ok(()) => {}
             Err(Error::NonFiniteValue { .. })
                 if ledger.options.on_failure == FailurePolicy::Continue =>
@@ -246,4 +248,33 @@ impl Polished {
             (None, None) => (0, 0, self.sigma),
         }
     }
+}
+
+/// Under [`FailurePolicy::Continue`], an estimate's values with its failed points (NaN or an
+/// infinity) left out: a failed point takes its antithetic partner's value (a pair shares
+/// its seed), so that the pair's difference, its whole share of the gradient, is zero; a
+/// pair that failed twice takes the mean of the finite values. The schedule then spends no
+/// evaluation on redraws. `None` when nothing failed, or when every point did (then the
+/// estimate is redrawn).
+fn ranked_values(o: &Options, values: &[f64], seeds: &[u64]) -> Option<Vec<f64>> {
+    if o.on_failure != FailurePolicy::Continue || values.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    if finite.is_empty() {
+        return None;
+    }
+    let mean = crate::estimator::mean(&finite);
+    let partner = |k: usize| {
+        let j = k ^ 1;
+        (j < values.len() && seeds[j] == seeds[k] && values[j].is_finite()).then(|| values[j])
+    };
+    let kept = |(k, &v): (usize, &f64)| {
+        if v.is_finite() {
+            v
+        } else {
+            partner(k).unwrap_or(mean)
+        }
+    };
+    Some(values.iter().enumerate().map(kept).collect())
 }

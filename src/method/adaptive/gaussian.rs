@@ -24,7 +24,9 @@
 //! - **flat generation**: when the best quarter of a generation ties with its best value, the
 //!   points cannot be told apart; `sigma` grows by `exp(0.2 + c_sigma / d_sigma)` so that the
 //!   smoothing widens until it feels a change of `f` (the paper's large `sigma_0`, found
-//!   automatically instead of guessed).
+//!   automatically instead of guessed). Not at a flat bottom: ties at the search's best
+//!   level with worse points around are the floor of a flat region, where growth would not
+//!   stop; three such generations end the run (`gaussian/ends.rs`).
 //! - **restarts from the best point seen** with a doubled population (IPOP: Auger and Hansen,
 //!   CEC 2005) when a run has converged or stalls; a larger population is a smoother, more
 //!   global estimate of the smoothed function's gradient, which multimodal functions need.
@@ -455,15 +457,13 @@ impl SearchGaussian {
         // against counting distinct values: docs/convergence.md).
         let flat = values[order[lambda / 4]] == best;
         self.ties |= flat;
-        // Ties are a plateau to cross only at the search's best level: ties above it (a wide
-        // spread landing on a staircase's higher steps) say nothing about where lower values
-        // are, and growing sigma on them grows it without bound.
-        let at_best = flat && best <= level;
-        self.flat_bottom = if at_best && worst > best {
-            self.flat_bottom + 1
-        } else {
-            0
-        };
+        // Ties are a plateau to cross when they lie above the search's best level, or when
+        // every point ties (nothing but the plateau in sight). Ties at the best level with
+        // worse points around are the bottom of a flat region (the optimum's, or a step's of
+        // the best value): growing sigma there grows it without bound (the staircase's
+        // optimum), so it does not grow, and three such generations in a row end the run.
+        let bottom = flat && best <= level && worst > best;
+        self.flat_bottom = if bottom { self.flat_bottom + 1 } else { 0 };
 
         // Mean: the rank-weighted natural-gradient step.
         let mut yw = DVector::zeros(n);
@@ -536,7 +536,7 @@ impl SearchGaussian {
         let csa = (cs / self.p.ds * (ps_norm / self.p.chi_n - 1.0)).min(1.0);
         let step = self.log_step(csa, paired, values, yw);
         self.sigma *= step.exp();
-        if at_best && self.flat_growth {
+        if flat && !bottom && self.flat_growth {
             self.sigma *= (0.2 + cs / self.p.ds).exp();
         }
         self.generation += 1;

@@ -109,6 +109,7 @@ impl Adaptive {
         if let Some(stall) = &self.stall {
             stall.check()?;
         }
+        self.repeats.check(n)?;
         if let Some(ys) = &self.asked {
             let Some(dist) = &self.dist else {
                 return len("adaptive search asked without a distribution", 0, 1);

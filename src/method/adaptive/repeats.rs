@@ -25,6 +25,20 @@ pub(crate) struct Repeats {
 }
 
 impl Repeats {
+    /// A read-back record's vectors against the run's dimension `n` (the reference is empty
+    /// before the first run).
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, n: usize) -> Result<(), crate::error::Error> {
+        use crate::check::len;
+        if !self.reference.is_empty() {
+            len("patience reference point", self.reference.len(), n)?;
+        }
+        match &self.last_spread {
+            Some(spread) => len("patience spread", spread.len(), n),
+            None => Ok(()),
+        }
+    }
+
     /// A run begins, with `best` the best point seen so far.
     pub(crate) fn begin(&mut self, best: &[f64]) {
         self.reference.clear();

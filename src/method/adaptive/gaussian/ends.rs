@@ -58,9 +58,17 @@ impl SearchGaussian {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// TolFun's tolerance at the value `lo`: `1e-12` in units of the run's first range when
+    /// that is below 1, or `1e-15 |lo|` if larger.
+    fn tolfun_tolerance(&self, lo: f64) -> f64 {
+        let scale = self.first_range.unwrap_or(1.0).min(1.0);
+        (1e-12 * scale).max(1e-15 * lo.abs())
+    }
+
     /// How precisely the run knows its best value: the range of its generations' best values
-    /// over the TolFun window (0 when they tie exactly, as at a flat bottom). It is in the
-    /// units of `f`, so a rule comparing values with it is scale-free.
+    /// over the TolFun window (0 when they tie exactly, as at a flat bottom), or TolFun's
+    /// tolerance if larger (values that TolFun calls flat are the same value). The range is
+    /// in the units of `f`, so a rule comparing values with it is scale-free.
     pub(crate) fn precision(&self) -> f64 {
         let h = &self.best_history;
         let recent = &h[h.len().saturating_sub(self.tolfun_window())..];
@@ -69,7 +77,7 @@ impl SearchGaussian {
             (lo.min(v), hi.max(v))
         });
         if lo <= hi {
-            hi - lo
+            (hi - lo).max(self.tolfun_tolerance(lo))
         } else {
             0.0
         }
@@ -118,8 +126,7 @@ impl SearchGaussian {
             let recent = &self.best_history[self.best_history.len() - window..];
             let hi = recent.iter().copied().fold(worst, f64::max);
             let lo = recent.iter().copied().fold(best, f64::min);
-            let scale = self.first_range.unwrap_or(1.0).min(1.0);
-            if hi - lo <= (1e-12 * scale).max(1e-15 * lo.abs()) {
+            if hi - lo <= self.tolfun_tolerance(lo) {
                 return Some(RunEnd::TolFun);
             }
         }
