@@ -114,6 +114,14 @@ impl Checkpoint {
 
     /// Written every `k` iterations instead of on a timer (and at every end; 0: only at the
     /// ends).
+    ///
+    /// ```
+    /// use plateau_free::lifecycle::{Checkpoint, CHECKPOINT_SECONDS};
+    /// let c = Checkpoint::new("run.json").every_iterations(100);
+    /// assert_eq!(c.path(), std::path::Path::new("run.json"));
+    /// assert!(!c.resumed());
+    /// assert_eq!(CHECKPOINT_SECONDS, 30.0);
+    /// ```
     #[must_use]
     pub fn every_iterations(mut self, k: usize) -> Checkpoint {
         self.every = Every::Iterations(k);
@@ -211,7 +219,11 @@ impl Checkpoint {
     /// The run to drive: the file's, when it exists, else `fresh`.
     pub(crate) fn begin<M: AskAndTell>(&mut self, fresh: M) -> Result<M, Error> {
         self.last_save = Instant::now();
-        self.identity = Some(owned(fresh.identity()));
+        let identity = fresh.identity();
+        if identity.is_empty() {
+            return Err(self.error("this method's state cannot be saved".into()));
+        }
+        self.identity = Some(owned(identity));
         let saved = self.read(&fresh)?;
         self.resumed = saved.is_some();
         let run = saved.unwrap_or(fresh);

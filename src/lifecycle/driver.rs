@@ -23,15 +23,16 @@ use crate::run::Ask;
 ///
 /// ```
 /// use plateau_free::lifecycle::Driver;
-/// use plateau_free::{Error, Minimizer};
+/// use plateau_free::{Error, FailurePolicy, Minimizer};
 ///
-/// // f gives NaN from its 30th call on; the policy (the default) raises.
+/// // f gives NaN from its 30th call on, and the policy raises.
 /// let calls = std::sync::atomic::AtomicUsize::new(0);
 /// let f = |x: &[f64]| match calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed) {
 ///     0..29 => x[0] * x[0],
 ///     _ => f64::NAN,
 /// };
-/// let failure = Minimizer::new(f).budget(500).run_with(&[2.0], Driver::new()).unwrap_err();
+/// let m = Minimizer::new(f).budget(500).on_failure(FailurePolicy::Raise);
+/// let failure = m.run_with(&[2.0], Driver::new()).unwrap_err();
 /// assert!(matches!(failure.error, Error::NonFiniteValue { .. }));
 /// let so_far = failure.result.unwrap();
 /// assert!(so_far.fun < 4.0 && so_far.evaluations < 30);
@@ -91,7 +92,7 @@ impl<R> From<Failure<R, Error>> for Error {
 /// ```
 pub struct Driver<'a> {
     interrupt: Option<Interrupt>,
-    observers: Vec<Box<dyn Observer + 'a>>,
+    observers: Vec<Box<dyn Observer + Send + 'a>>,
     workers: Workers,
     #[cfg(feature = "serde")]
     checkpoint: Option<Checkpoint>,
@@ -108,6 +109,12 @@ impl fmt::Debug for Driver<'_> {
         d.finish()
     }
 }
+
+/// A driver can be moved to another thread.
+const _: fn() = || {
+    fn send<T: Send>() {}
+    send::<Driver<'static>>();
+};
 
 impl Default for Driver<'_> {
     fn default() -> Self {
@@ -135,9 +142,10 @@ impl<'a> Driver<'a> {
     }
 
     /// Shows `observer` every iteration (observers are called in the order added). Pass
-    /// `&mut observer` to read it after the run.
+    /// `&mut observer` to read it after the run. Observers are `Send`, so that a driver can
+    /// run on another thread (the Python bindings run it with the interpreter released).
     #[must_use]
-    pub fn observe(mut self, observer: impl Observer + 'a) -> Self {
+    pub fn observe(mut self, observer: impl Observer + Send + 'a) -> Self {
         self.observers.push(Box::new(observer));
         self
     }

@@ -79,7 +79,8 @@ pub trait AskAndTell {
 
     /// The settings that make the run this run, by name, first the ones a user is likeliest
     /// to change: a checkpoint compares them before it resumes and names the first that
-    /// differs. Empty for a method that cannot be saved.
+    /// differs. Empty (the default) for a method that cannot be saved: a checkpoint
+    /// refuses it before the run begins.
     fn identity(&self) -> Vec<(&'static str, String)> {
         Vec::new()
     }
@@ -118,7 +119,7 @@ fn unsaved() -> Error {
     }
 }
 
-/// `x0` for an identity: whole when short, else its dimension and a hash of its bits.
+/// A vector for an identity: whole when short, else its dimension and a hash of its bits.
 fn vector_identity(x: &[f64]) -> String {
     if x.len() <= 8 {
         return format!("{x:?}");
@@ -200,7 +201,12 @@ impl AskAndTell for AskTell {
             ("seed", o.seed.to_string()),
             ("strategy", format!("{:?}", o.strategy)),
             ("sigma0", format!("{:?}", o.sigma0)),
-            ("bounds", format!("{:?}", o.bounds)),
+            (
+                "bounds",
+                o.bounds.as_ref().map_or("None".into(), |(lo, hi)| {
+                    format!("{} to {}", vector_identity(lo), vector_identity(hi))
+                }),
+            ),
             ("target", format!("{:?}", o.target)),
             ("population", format!("{:?}", o.population)),
             ("restarts", o.restarts.to_string()),

@@ -5,6 +5,26 @@ use std::io::Write;
 use std::time::{Duration, Instant};
 
 /// Where a run stands after an iteration: what an [`Observer`] sees.
+///
+/// ```
+/// use plateau_free::lifecycle::{Driver, Observer, Progress};
+/// use plateau_free::Minimizer;
+///
+/// struct Last(Option<Progress>);
+/// impl Observer for Last {
+///     fn observe(&mut self, p: &Progress) {
+///         self.0 = Some(*p);
+///     }
+/// }
+/// let mut last = Last(None);
+/// let best = Minimizer::new(|x: &[f64]| x[0] * x[0])
+///     .budget(80)
+///     .run_with(&[1.0], Driver::new().observe(&mut last))?;
+/// let p = last.0.unwrap();
+/// assert_eq!((p.iteration, p.evaluations, p.budget), (best.iterations, 80, Some(80)));
+/// assert_eq!((p.best, p.sigma), (best.fun, best.sigma));
+/// # Ok::<(), plateau_free::lifecycle::Failure<plateau_free::Minimum>>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
 pub struct Progress {
@@ -63,6 +83,10 @@ impl<O: Observer + ?Sized> Observer for &mut O {
 }
 
 /// How often [`ProgressLine`] writes by default, in seconds.
+///
+/// ```
+/// assert_eq!(plateau_free::lifecycle::PROGRESS_SECONDS, 5.0);
+/// ```
 pub const PROGRESS_SECONDS: f64 = 5.0;
 
 /// A plain progress line to any writer (a terminal, a log file, a pipe): one every few

@@ -4,6 +4,20 @@
 use super::observe::{Observer, Progress};
 
 /// One row of a [`Trace`]: where the run stood after an iteration.
+///
+/// ```
+/// use plateau_free::lifecycle::{Driver, Trace};
+/// use plateau_free::Minimizer;
+///
+/// let mut trace = Trace::default();
+/// Minimizer::new(|x: &[f64]| x[0].abs()).budget(50).run_with(&[1.0], Driver::new().observe(&mut trace))?;
+/// let rows = trace.rows();
+/// // The start alone, then a generation a row.
+/// assert_eq!((rows[0].iteration, rows[0].evaluations, rows[0].best), (0, 1, 1.0));
+/// assert!(rows[1].evaluations > 1 && rows[1].sigma > 0.0);
+/// assert_eq!((trace.stride(), trace.iterations_seen()), (1, rows.len()));
+/// # Ok::<(), plateau_free::lifecycle::Failure<plateau_free::Minimum>>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct TraceRow {

@@ -397,6 +397,19 @@ impl AskTell {
 
     /// Iterations completed (generations of the adaptive search, gradient steps of the
     /// paper's loop): [`Minimum::iterations`] as it stands.
+    ///
+    /// ```
+    /// let m = plateau_free::Minimizer::without_objective().budget(100).sigma0(0.5);
+    /// let mut run = m.ask_tell(&[1.0])?;
+    /// assert_eq!((run.iteration(), run.sigma()), (0, 0.5));
+    /// while let Some(ask) = run.ask()? {
+    ///     let values: Vec<f64> = ask.iter().map(|(x, _)| x[0].abs()).collect();
+    ///     run.tell(&values)?;
+    /// }
+    /// let best = run.result().unwrap();
+    /// assert_eq!((run.iteration(), run.sigma()), (best.iterations, best.sigma));
+    /// # Ok::<(), plateau_free::Error>(())
+    /// ```
     pub fn iteration(&self) -> usize {
         self.method.progress().0
     }

@@ -119,6 +119,15 @@ impl Polished {
         }
     }
 
+    /// Iterations and restarts so far, and the spread of the next iteration.
+    pub(crate) fn progress(&self) -> (usize, usize, f64) {
+        match (&self.polish, &self.run) {
+            (Some(polish), _) => polish.progress(),
+            (None, Some(run)) => (run.iteration(), 0, run.sigma().unwrap_or(self.sigma)),
+            (None, None) => (0, 0, self.sigma),
+        }
+    }
+
     /// Whether the budget allows the loop an iteration.
     pub(crate) fn has_iterations(&self) -> bool {
         self.run.is_some()
@@ -239,16 +248,6 @@ impl Polished {
     }
 }
 
-impl Polished {
-    /// Iterations and restarts so far, and the spread of the next iteration.
-    pub(crate) fn progress(&self) -> (usize, usize, f64) {
-        match (&self.polish, &self.run) {
-            (Some(polish), _) => polish.progress(),
-            (None, Some(run)) => (run.iteration(), 0, run.sigma().unwrap_or(self.sigma)),
-            (None, None) => (0, 0, self.sigma),
-        }
-    }
-}
 
 /// Under [`FailurePolicy::Continue`], an estimate's values with its failed points (NaN or an
 /// infinity) left out: a failed point takes its antithetic partner's value (a pair shares
