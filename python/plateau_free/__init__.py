@@ -6,8 +6,10 @@
 
 and estimates ``grad Q_sigma`` by importance-sampled, antithetic Monte Carlo from values of
 ``f`` alone (Fischer and Ritschel, "Plateau-reduced Differentiable Path Tracing", CVPR 2023).
-The smoothed objective has no plateaus; an annealed ``sigma`` and Adam do the rest. The work
-runs in Rust with the GIL released; ``fun`` is called back with the GIL held.
+The smoothed objective has no plateaus; an annealed ``sigma`` and Adam do the rest. The methods
+run in Rust; :func:`minimize` asks them for points and evaluates ``fun`` on them in Python (on
+``workers`` when given), and a failed evaluation, Ctrl-C, progress and checkpoints are handled
+the same way for every method.
 
 The main entry points:
 

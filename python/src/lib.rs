@@ -2,13 +2,16 @@
 //! `minimize`, `Sampling` and the result types) by the Python package `plateau_free`
 //! (`python/plateau_free/__init__.py`, the code in `python/plateau_free/_minimize.py` and beside it).
 //!
-//! How a Python objective runs: every estimate, and every run of `plateau_free::Minimizer`
-//! (`plateau_free.minimize(fun, x0, budget=...)`), is computed with the GIL released
-//! ([`Python::detach`]); each call of `fun` re-attaches, checks for pending signals (so Ctrl-C
-//! stops a run within one call of `fun`), builds one numpy array for the point (or one
-//! `(N, n)` array for a whole batch, copied in a single `memcpy`), calls `fun` and reads the
-//! value. The first exception raised by `fun` is kept and the remaining evaluations of the
-//! estimate are skipped; it is then raised unchanged (type, message, traceback).
+//! How a Python objective runs. `plateau_free.minimize`'s adaptive, polished and paper runs are
+//! the library's ask-and-tell state machines (`_AskTell`), asked and told by the Python driver
+//! (`python/plateau_free/_drive.py`), which evaluates the points where `workers` says and owns
+//! failures, Ctrl-C, progress and checkpoints. The estimators and the baselines' loop
+//! (`_minimize`) compute with the GIL released ([`Python::detach`]); each call of `fun`
+//! re-attaches, checks for pending signals (so Ctrl-C stops a run within one call of `fun`),
+//! builds one numpy array for the point (or one `(N, n)` array for a whole batch, copied in a
+//! single `memcpy`), calls `fun` and reads the value. The first exception raised by `fun` is
+//! kept and the remaining evaluations of the estimate are skipped; it is then raised unchanged
+//! (type, message, traceback).
 //!
 //! Threads: every pyclass with state (the estimators, `Adam`, `_AskTell`) is `frozen` and keeps
 //! that state behind a mutex, taken with the GIL released ([`locking::Guarded`]): calls on one

@@ -1,4 +1,7 @@
-//! The paper's loop (`Optimizer`): `plateau_free.minimize(..., method="plateau")`.
+//! The paper's loop in its callback form (`Optimizer`), with any estimator: what
+//! `plateau_free.minimize(..., method="fd")` and `"spsa"` run (the baselines have no ask-and-tell
+//! form); and [`Record`], the per-iteration records of the paper's loop that
+//! `plateau_free.minimize` returns as `history`, kept by this loop and by `_AskTell`.
 
 use super::*;
 
@@ -377,11 +380,13 @@ pub(crate) fn run<G: GradientEstimator + Send + ?Sized>(
     ))
 }
 
-/// The optimisation loop behind `plateau_free.minimize`: `iterations` Adam steps along the
-/// estimator's gradient with the annealer's sigma. `callback(iteration, x, sigma, value,
-/// gradient, nfev)` runs after every iteration; a truthy return stops the run. Returns a dict
-/// of raw results that `plateau_free.minimize` turns into an `OptimizeResult` (`restored`: the
-/// iterations read from the checkpoint file, 0 for a fresh run).
+/// The optimisation loop behind `plateau_free.minimize(method='fd' | 'spsa')`: `iterations`
+/// Adam steps along the estimator's gradient with the annealer's sigma. `callback(iteration,
+/// x, sigma, value, gradient, nfev)` runs after every iteration; a truthy return stops the run.
+/// Ctrl-C (a `KeyboardInterrupt` from `fun`, the callback or the signal check) ends it after the
+/// last completed iteration (`interrupted` in the raw results). Returns a dict of raw results
+/// that `plateau_free.minimize` turns into an `OptimizeResult` (`restored`: the iterations read
+/// from the checkpoint file, 0 for a fresh run).
 #[pyfunction]
 #[pyo3(signature = (estimator, x0, adam, annealer, iterations=None, callback=None, record_x=false, checkpoint=None, checkpoint_every=None, settings=None, keep_history=None))]
 #[allow(clippy::too_many_arguments)]
