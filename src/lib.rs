@@ -157,7 +157,8 @@ pub use objective::{Batch, NoObjective, Objective, Points, Seeded};
 pub use optimize::Step;
 pub use run::{
     Ask, FailurePolicy, History, HistoryKeep, Metric, Minimum, OptimizerState, RunError, Stall,
-    Stop, Strategy, FULL_METRIC_LIMIT, FULL_METRIC_MAX_DIM, STALL_WINDOW,
+    Stop, Strategy, DEFAULT_PATIENCE, DEFAULT_POLISH, FULL_METRIC_LIMIT, FULL_METRIC_MAX_DIM,
+    STALL_WINDOW,
 };
 pub use sampling::Sampling;
 pub use vector::{

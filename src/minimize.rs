@@ -33,8 +33,8 @@ use crate::run::Stop;
 /// ```
 ///
 /// # Errors
-/// An empty or non-finite `x0`, a zero budget, or `f` returning NaN or an infinity
-/// ([`Error::NonFiniteValue`], with the point).
+/// An empty or non-finite `x0`, or a zero budget. A NaN or an infinity from `f` is a failed
+/// point, ranked below every finite value and counted in [`Minimum::failures`].
 pub fn minimize<F: Fn(&[f64]) -> f64>(f: F, x0: &[f64], budget: usize) -> Result<Minimum, Error> {
     Minimizer::new(f).budget(budget).run(x0)
 }
@@ -141,13 +141,32 @@ impl<F> Minimizer<F> {
         /// The seed of every random choice (default 0).
         seed(seed: u64) => options.seed = seed;
 
-        /// The starting spread, in the units of `x` (default: a quarter of the mean box width
-        /// with [`Minimizer::bounds`], else `max(1, max |x0_i|) / 2`). It adapts from there: a
+        /// The starting spread, in the units of `x` (default: a quarter of the mean finite box
+        /// width with [`Minimizer::bounds`], else `max(1, max |x0_i|) / 2`). It adapts from there: a
         /// poor guess costs evaluations, not the result.
         sigma0(sigma0: f64) => options.sigma0 = Some(sigma0);
 
+        /// A starting spread for each coordinate, in the units of `x` (positive, one per
+        /// coordinate): for coordinates of different scales. It sets the adaptive search's
+        /// starting spread and metric together (their product); set it or
+        /// [`Minimizer::sigma0`], not both.
+        sigma0_each(spreads: Vec<f64>) => options.sigma0_each = Some(spreads);
+
+        /// How many restarts in a row must converge back at the best point seen before them
+        /// for the run to be done ([`Stop::Done`], a success) before its budget (default
+        /// [`crate::DEFAULT_PATIENCE`]; 0: the budget, the target or the stall rule alone end
+        /// the run). A converged restart is one that ended with its spread, its values or its
+        /// flat bottom below its own precision; "back at the best point" means its best value
+        /// within that precision of the best seen before it, and its mean within a few of its
+        /// standard deviations of that point. On an objective whose values tie (a staircase,
+        /// a quantised render), one more such restart is asked for: restarts there can end on
+        /// a step of the best value that is not the best step.
+        patience(restarts: usize) => options.patience = restarts;
+
         /// A box: every evaluated point is projected onto it, and restarts stay inside it; `x0`
-        /// must lie inside it. The bounds must be finite.
+        /// must lie inside it. An infinite entry (`f64::NEG_INFINITY` below,
+        /// `f64::INFINITY` above) leaves that side open; the default starting spread comes
+        /// from the finite widths only.
         bounds(lower: Vec<f64>, upper: Vec<f64>) => options.bounds = Some((lower, upper));
 
         /// Stop as soon as `f` reaches `target` or below: after the iteration (the adaptive
@@ -183,7 +202,7 @@ impl<F> Minimizer<F> {
 
         /// With [`Strategy::Paper`]: spend the last `fraction` of the budget on the adaptive
         /// search, started at the loop's best point with the loop's last spread (default 0: the
-        /// loop alone).
+        /// loop alone; with [`Strategy::Paper`], [`crate::DEFAULT_POLISH`] when not set).
         ///
         /// The paper's annealed loop finds the basin (its large early spread smooths plateaus
         /// away) but ends where Adam's fixed learning rate and the spread's floor leave it, about
@@ -203,7 +222,7 @@ impl<F> Minimizer<F> {
         /// assert_eq!(polished.evaluations, 800);
         /// # Ok::<(), plateau_free::Error>(())
         /// ```
-        polish(fraction: f64) => options.polish = fraction;
+        polish(fraction: f64) => options.polish = Some(fraction);
 
         /// Ends the run when the best value has not improved over the last `window` of the
         /// budget (a fraction in `(0, 1]`; [`crate::STALL_WINDOW`] is the tested choice), the
@@ -216,10 +235,12 @@ impl<F> Minimizer<F> {
         /// ```
         /// use plateau_free::{Minimizer, Stop, STALL_WINDOW};
         ///
-        /// // A floor: every point with |x| < 1 is as good as the optimum.
+        /// // A floor: every point with |x| < 1 is as good as the optimum. (Without the
+        /// // patience rule, which would end this run first.)
         /// let f = |x: &[f64]| (x[0].abs() - 1.0).max(0.0);
         /// let best = Minimizer::new(f)
         ///     .budget(5000)
+        ///     .patience(0)
         ///     .stop_when_stalled(STALL_WINDOW)
         ///     .run(&[8.0])?;
         /// assert_eq!(best.stop, Stop::Stalled);

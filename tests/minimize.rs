@@ -2,7 +2,7 @@
 
 use std::cell::{Cell, RefCell};
 
-use plateau_free::{minimize, Error, Metric, Minimizer, Seeded, Stop, Strategy};
+use plateau_free::{minimize, Error, FailurePolicy, Metric, Minimizer, Seeded, Stop, Strategy};
 
 /// A staircase: the squared distance of the rounded point to an integer target.
 fn staircase(target: &[f64]) -> impl Fn(&[f64]) -> f64 + '_ {
@@ -88,6 +88,7 @@ fn the_papers_loop_is_one_option_away() {
     let best = Minimizer::new(&f)
         .budget(1602)
         .strategy(paper)
+        .polish(0.0)
         .run(&[0.0; 3])
         .unwrap();
     assert_eq!(best.iterations, 400);
@@ -264,7 +265,7 @@ fn the_scale_of_f_does_not_matter() {
 }
 
 #[test]
-fn non_finite_values_of_f_are_errors() {
+fn non_finite_values_of_f_are_errors_when_raising() {
     for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
         let calls = Cell::new(0);
         let f = |x: &[f64]| {
@@ -275,7 +276,10 @@ fn non_finite_values_of_f_are_errors() {
                 x[0] * x[0]
             }
         };
-        match minimize(f, &[1.0, 2.0], 100).unwrap_err() {
+        let raising = Minimizer::new(f)
+            .budget(100)
+            .on_failure(FailurePolicy::Raise);
+        match raising.run(&[1.0, 2.0]).unwrap_err() {
             Error::NonFiniteValue {
                 sample,
                 value,

@@ -359,8 +359,8 @@ fn the_start_counts_in_ten_thousand_dimensions() {
     assert!(best.fun <= f0, "{} > f(x0) = {f0}", best.fun);
 }
 
-/// `Strategy::Paper` spends the start, `N` per iteration and the final evaluation:
-/// `(budget - 2) / N` iterations, or the start alone when no iteration fits.
+/// `Strategy::Paper` without polish spends the start, `N` per iteration and the final
+/// evaluation: `(budget - 2) / N` iterations, or the start alone when no iteration fits.
 #[test]
 fn the_papers_budget_counts_the_start_and_the_final_evaluation() {
     let f = |x: &[f64]| (x[0] - 0.2).abs();
@@ -372,6 +372,7 @@ fn the_papers_budget_counts_the_start_and_the_final_evaluation() {
                     lr: 0.05,
                     sigma0: 0.3,
                 })
+                .polish(0.0)
                 .budget(budget)
                 .run(&[1.0])
                 .unwrap();

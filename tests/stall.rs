@@ -136,11 +136,18 @@ fn floor(x: &[f64]) -> f64 {
 
 #[test]
 fn the_adaptive_search_stops_on_a_floor_and_keeps_its_best() {
+    // Without the patience rule, which would end these runs first: the stall rule alone.
     let x0 = [6.0, -4.0, 3.0];
-    let plain = Minimizer::new(floor).budget(6000).seed(5).run(&x0).unwrap();
+    let plain = Minimizer::new(floor)
+        .budget(6000)
+        .seed(5)
+        .patience(0)
+        .run(&x0)
+        .unwrap();
     let ruled = Minimizer::new(floor)
         .budget(6000)
         .seed(5)
+        .patience(0)
         .stop_when_stalled(STALL_WINDOW)
         .run(&x0)
         .unwrap();
@@ -152,6 +159,7 @@ fn the_adaptive_search_stops_on_a_floor_and_keeps_its_best() {
     let mut run = Minimizer::without_objective()
         .budget(6000)
         .seed(5)
+        .patience(0)
         .stop_when_stalled(STALL_WINDOW)
         .ask_tell(&x0)
         .unwrap();
@@ -173,6 +181,7 @@ fn the_polish_is_judged_from_the_hand_over_not_the_loop() {
         let mut m = Minimizer::new(floor)
             .strategy(paper)
             .polish(0.25)
+            .patience(0)
             .budget(4000)
             .seed(2);
         if let Some(w) = window {

@@ -2,7 +2,7 @@
 //! the sparsity patterns, the Gauss-Newton run, and every way an input can be wrong.
 
 use plateau_free::kernel::normal_cdf;
-use plateau_free::{smoothed_jacobian, Acceptance, Error, LeastSquares, Sparsity};
+use plateau_free::{smoothed_jacobian, Acceptance, Error, FailurePolicy, LeastSquares, Sparsity};
 use proptest::prelude::*;
 
 /// The standard normal density.
@@ -263,8 +263,9 @@ fn bad_options_of_the_run_are_errors() {
     assert!(e(base.clone(), &[0.0, 1.0]).contains("x0 has length 2, expected 1"));
     assert!(e(base.clone(), &[]).contains("theta is empty"));
     assert!(e(base.clone().bounds(vec![0.0], vec![1.0]), &[2.0]).contains("outside the bounds"));
-    // Ask and tell out of order, wrong counts, NaN: errors, and the run goes on.
-    let mut run = base.clone().budget(50).ask_tell(&[0.5]).unwrap();
+    // Ask and tell out of order, wrong counts, NaN (when raising): errors, and the run goes on.
+    let raising = base.clone().on_failure(FailurePolicy::Raise);
+    let mut run = raising.budget(50).ask_tell(&[0.5]).unwrap();
     assert_eq!(run.tell(&[1.0]), Err(Error::NothingAsked));
     assert!(matches!(run.finish(), Err(Error::Unfinished { .. })));
     assert_eq!(run.ask().unwrap().map(|a| a.len()), Some(1));

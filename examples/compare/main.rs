@@ -19,6 +19,7 @@ mod functions;
 mod methods;
 mod page;
 mod peers;
+mod variant;
 
 use std::time::Instant;
 

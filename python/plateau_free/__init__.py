@@ -6,8 +6,10 @@
 
 and estimates ``grad Q_sigma`` by importance-sampled, antithetic Monte Carlo from values of
 ``f`` alone (Fischer and Ritschel, "Plateau-reduced Differentiable Path Tracing", CVPR 2023).
-The smoothed objective has no plateaus; an annealed ``sigma`` and Adam do the rest. The work
-runs in Rust with the GIL released; ``fun`` is called back with the GIL held.
+The smoothed objective has no plateaus; an annealed ``sigma`` and Adam do the rest. The methods
+run in Rust; :func:`minimize` asks them for points and evaluates ``fun`` on them in Python (on
+``workers`` when given), and a failed evaluation, Ctrl-C, progress and checkpoints are handled
+the same way for every method.
 
 The main entry points:
 
@@ -24,6 +26,7 @@ The main entry points:
 - :func:`least_squares` -- for a ``fun`` that returns an array (a residual image): the
   Gaussian-smoothed Jacobian on a sparsity pattern and damped Gauss-Newton steps.
 - :class:`FiniteDifference`, :class:`Spsa` -- the baselines (also in ``plateau_free.baseline``).
+- :func:`plot_history` -- a run's history as a figure (matplotlib, the ``[plot]`` extra).
 - :class:`OptionTypeError` -- an option of the wrong type: a ValueError (as every bad option)
   and a TypeError.
 
@@ -53,7 +56,8 @@ from ._native import (
     Spsa,
     __version__,
 )
-from ._result import History, OptimizeResult
+from ._plot import plot_history
+from ._result import History, OptimizeResult, SearchHistory
 from ._types import Sampling
 
 __all__ = [
@@ -69,14 +73,19 @@ __all__ = [
     "OptionTypeError",
     "PlateauFreeGradient",
     "Sampling",
+    "SearchHistory",
     "Spsa",
     "ask_tell",
     "least_squares",
     "minimize",
+    "plot_history",
 ]
 
 # The public names live in the private modules below (one job each: _types, _result,
 # _options, _minimize, _ask_tell); they are shown, and pickled, as ``plateau_free``'s own.
-for _public in (AskTell, History, OptimizeResult, Sampling, ask_tell, least_squares, minimize):
+for _public in (
+    AskTell, History, OptimizeResult, Sampling, SearchHistory, ask_tell, least_squares, minimize,
+    plot_history,
+):  # fmt: skip
     _public.__module__ = __name__
 del _public

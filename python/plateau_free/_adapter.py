@@ -13,7 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ._native import OptionTypeError, PlateauFreeGradient
-from ._options import _is_bool, _is_real, _positive, _show, _whole
+from ._checks import _is_bool, _is_real, _positive, _show, _whole
 from ._types import _FloatArray, _SamplingName
 
 _U64_MAX = 2**64 - 1

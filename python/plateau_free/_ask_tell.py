@@ -4,16 +4,31 @@ evaluated by the caller."""
 from __future__ import annotations
 
 import math
-from typing import Any, Literal, Optional, Union
+import sys
+from typing import TYPE_CHECKING, Any, Literal, Optional
 
 import numpy as np
 import numpy.typing as npt
 
 from . import _native
-from ._native import Annealer, OptionTypeError, PlateauFreeGradient
-from ._options import _adaptive_options, _check_call, _PaperOptions, _polished_options, _show
+from ._checks import _show
+from ._native import OptionTypeError, PlateauFreeGradient
+from ._options import (
+    Options,
+    _adaptive_options,
+    _check_call,
+    _options_doc,
+    _PaperOptions,
+    _polished_options,
+)
 from ._result import OptimizeResult, _adaptive_result, _paper_result
-from ._types import _Bounds, _FloatArray, _SamplingName, _ScheduleName
+from ._types import _FloatArray
+
+if TYPE_CHECKING:
+    if sys.version_info >= (3, 11):
+        from typing import Unpack
+    else:
+        from typing_extensions import Unpack
 
 
 class AskTell:
@@ -41,12 +56,14 @@ class AskTell:
     0.0
     """
 
-    __slots__ = ("_raw", "_method", "_budget", "_asked")
+    __slots__ = ("_raw", "_method", "_budget", "_asked", "_policy", "_seed")
 
-    def __init__(self, raw: Any, method: str, budget: int) -> None:
+    def __init__(self, raw: Any, method: str, budget: int, policy: str, seed: int) -> None:
         self._raw = raw
         self._method = method
         self._budget = budget
+        self._policy = policy
+        self._seed = seed
         # The points of the last ask, until told (to name the point of a non-finite value).
         self._asked: Optional[_FloatArray] = None
 
@@ -93,15 +110,17 @@ class AskTell:
         Raises
         ------
         ValueError
-            Nothing asked, the wrong number of values, or a NaN or an infinity (naming the
-            evaluation, the value and the point; the paper loop's final value included).
+            Nothing asked, the wrong number of values, or (with ``on_failure='raise'``) a NaN
+            or an infinity, naming the evaluation, the value and the point. The paper loop's
+            final value must be finite under either policy.
             Values that are not real numbers (None, strings that are not numbers, complex
             numbers) are an :class:`OptionTypeError`, a ValueError and a TypeError. After an
             error the same points still wait for their values.
         """
         array = _told(values)
         asked = self._asked
-        if asked is not None and array.size == len(asked):
+        final = bool(self._raw.final_asked)
+        if asked is not None and array.size == len(asked) and (self._policy == "raise" or final):
             # Refused here for every ask (the Rust side refuses them too, but for the paper
             # loop's final point).
             bad = np.flatnonzero(~np.isfinite(array))
@@ -139,8 +158,11 @@ class AskTell:
                 f"the run has not ended ({self.nfev} evaluations told): ask and tell until done"
             )
         if self._method in ("adaptive", "polished"):
-            return _adaptive_result(raw, self._budget)
-        return _paper_result(raw, raw["final_value"])
+            result = _adaptive_result(raw, self._budget)
+        else:
+            result = _paper_result(raw, raw["final_value"])
+        result.update(nfail=int(raw.get("failures", 0)), seed=self._seed, from_checkpoint=False)
+        return result
 
     def __repr__(self) -> str:
         state = "done" if self.done else "running"
@@ -168,28 +190,15 @@ def ask_tell(
     x0: npt.ArrayLike,
     *,
     method: Optional[Literal["adaptive", "plateau", "paper", "polished"]] = "adaptive",
-    budget: Optional[int] = None,
-    seed: int = 0,
-    sigma0: Optional[float] = None,
-    bounds: Optional[_Bounds] = None,
-    target: Optional[float] = None,
-    population: Optional[int] = None,
-    restarts: Optional[bool] = None,
-    polish: Optional[float] = None,
-    stop_when_stalled: Optional[float] = None,
-    iterations: Optional[int] = None,
-    lr: Optional[float] = None,
-    samples: Optional[int] = None,
-    sampling: Optional[_SamplingName] = None,
-    antithetic: Optional[bool] = None,
-    orthogonal: Optional[bool] = None,
-    annealer: Union[_ScheduleName, Annealer, None] = None,
-    sigma_min: Optional[float] = None,
-    record_x: Optional[bool] = None,
-    keep_history: Optional[int] = None,
-    final_evaluation: Optional[bool] = None,
+    **options: Unpack[Options],
 ) -> AskTell:
-    """:func:`minimize` without ``fun``: an :class:`AskTell` run whose points you evaluate.
+    """(made from _ASK_TELL_DOC and the options' table)"""
+    chosen, x0_array, checked = _check_call("ask_tell", method, x0, dict(options))
+    run, budget, _ = _native_run(chosen, x0_array, checked)
+    return AskTell(run, chosen, budget, checked["on_failure"], checked["seed"])
+
+
+_ASK_TELL_DOC = """:func:`minimize` without ``fun``: an :class:`AskTell` run whose points you evaluate.
 
     The methods, the options each takes, their defaults and their checks are
     :func:`minimize`'s: ``method='adaptive'`` (the default), ``'plateau'`` -- also spelt
@@ -205,31 +214,39 @@ def ask_tell(
             es.tell([fun(x) for x in X])            # or fun(x, s) for a seeded fun
         result = es.result                           # OptimizeResult, as minimize returns
 
-    The baselines (``method='fd'``, ``'spsa'``), ``callback``, ``parallel`` and
-    ``checkpoint`` are :func:`minimize`'s alone: the caller evaluates, and can stop (or save
-    its own state) whenever it likes.
+    The baselines (``method='fd'``, ``'spsa'``) and the options of the evaluation
+    (``args``, ``batched``, ``seeded``, ``callback``, ``workers``, ``parallel``, ``disp``,
+    ``checkpoint``) are :func:`minimize`'s alone: the caller evaluates, and can stop (or save
+    its own state) whenever it likes. With ``on_failure='continue'`` (the default) NaN and
+    infinities may be told: the failed points rank below every finite value.
+
+    Parameters
+    ----------
+    x0 : array_like
+        The start: an array of finite numbers, at least one, inside ``bounds``.
+    method : str
+        ``'adaptive'`` (default), ``'plateau'``/``'paper'`` or ``'polished'``.
+{options}
 
     Raises
     ------
     ValueError
         Bad input, as :func:`minimize`.
     """
-    options = dict(
-        budget=budget, seed=seed, sigma0=sigma0, bounds=bounds, target=target,
-        population=population, restarts=restarts, polish=polish,
-        stop_when_stalled=stop_when_stalled, iterations=iterations, lr=lr,
-        samples=samples, sampling=sampling, antithetic=antithetic, orthogonal=orthogonal,
-        annealer=annealer, sigma_min=sigma_min, record_x=record_x, keep_history=keep_history,
-        final_evaluation=final_evaluation,
-    )  # fmt: skip
-    chosen, x0_array, checked = _check_call("ask_tell", method, x0, options)
-    budget_or_default = checked.get("budget", 1000 * x0_array.size)
+ask_tell.__doc__ = _ASK_TELL_DOC.replace("{options}", _options_doc("ask_tell"))
+
+
+def _native_run(
+    chosen: str, x0: np.ndarray, checked: dict[str, Any]
+) -> tuple[_native._AskTell, int, dict[str, Any]]:
+    """The Rust ask-and-tell run of ``chosen`` from ``x0`` with the checked options, its budget
+    (for the messages) and what a checkpoint must also compare (the paper loop's iterations
+    and schedule)."""
+    budget = checked.get("budget", 1000 * x0.size)
     if chosen == "adaptive":
-        raw = _native._AskTell.adaptive(x0_array, _adaptive_options(checked))
-        return AskTell(raw, "adaptive", budget_or_default)
+        return _native._AskTell.adaptive(x0, _adaptive_options(checked)), budget, {}
     if chosen == "polished":
-        raw = _native._AskTell.adaptive(x0_array, _polished_options(checked))
-        return AskTell(raw, "polished", budget_or_default)
+        return _native._AskTell.adaptive(x0, _polished_options(checked)), budget, {}
     o = _PaperOptions.given(checked)
     # The estimator's own checks, with its messages (it is never evaluated).
     PlateauFreeGradient(
@@ -240,8 +257,8 @@ def ask_tell(
         orthogonal=o.orthogonal,
     )
     iterations, annealer, adam = o.schedule(checked.get("budget"), o.samples, checked.get("bounds"))
-    raw = _native._AskTell.paper(
-        x0_array,
+    run = _native._AskTell.paper(
+        x0,
         adam,
         annealer,
         iterations,
@@ -253,5 +270,6 @@ def ask_tell(
         record_x=o.record_x,
         final_evaluation=o.final_evaluation,
         keep_history=o.keep_history,
+        on_failure=checked["on_failure"],
     )
-    return AskTell(raw, "plateau", budget_or_default)
+    return run, budget, {"iterations": iterations, "schedule": repr(annealer)}

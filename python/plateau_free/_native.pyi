@@ -2,7 +2,7 @@
 re-exported by ``plateau_free`` (whose own modules, ``__init__.py``, ``_minimize.py``, ..., are
 typed inline)."""
 
-from typing import Any, Callable, Literal, Optional, Sequence, Tuple, TypedDict, Union, final
+from typing import Any, Callable, Literal, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -11,6 +11,9 @@ __version__: str
 PAPER_SIGMA_MIN: float
 PAPER_WARMUP: float
 STALL_WINDOW: float
+DEFAULT_POLISH: float
+CHECKPOINT_SECONDS: float
+PROGRESS_SECONDS: float
 
 _ArrayLike = npt.ArrayLike
 _FloatArray = npt.NDArray[np.float64]
@@ -172,38 +175,29 @@ class Adam:
 __all__ = [
     "Adam",
     "Annealer",
+    "CHECKPOINT_SECONDS",
+    "DEFAULT_POLISH",
     "FiniteDifference",
     "OptionTypeError",
     "PAPER_SIGMA_MIN",
     "PAPER_WARMUP",
+    "PROGRESS_SECONDS",
     "PlateauFreeGradient",
     "STALL_WINDOW",
     "Spsa",
     "_AskTell",
     "_minimize",
-    "_minimize_adaptive",
+    "_replace_file",
     "_rust_reference_estimates",
     "_rust_reference_minimize",
     "_rust_reference_minimize_adaptive",
     "_rust_seconds_per_evaluation",
 ]
 
-class _AdaptiveOptions(TypedDict):
-    """The options of ``method='adaptive'`` and ``'polished'``: the dict that
-    ``plateau_free._options._adaptive_options`` makes, every key given. A name of the stubs alone (the
-    extension takes a plain dict). ``paper``: ``Strategy::Paper``'s ``(samples, lr, sigma0)``
-    and ``polish`` its fraction (``method='polished'``), else None."""
-
-    budget: int | None
-    seed: int
-    sigma0: float | None
-    bounds: tuple[list[float], list[float]] | None
-    target: float | None
-    population: int | None
-    restarts: bool
-    paper: tuple[int, float, float] | None
-    polish: float | None
-    stall: float | None
+# The options of ``method='adaptive'`` and ``'polished'``: the dict that
+# ``plateau_free._options._adaptive_options`` makes, read key by key by ``AdaptiveOptions`` in
+# python/src/convert.rs (declared there and in the options' table alone).
+_AdaptiveOptions = dict[str, Any]
 
 class _AskTell:
     """The Rust side of ``plateau_free.AskTell``: an adaptive or paper-loop run, asked and told."""
@@ -224,6 +218,7 @@ class _AskTell:
         record_x: bool = False,
         final_evaluation: bool = True,
         keep_history: int | None = None,
+        on_failure: str = "raise",
     ) -> _AskTell: ...
     def _state(self) -> str: ...
     @staticmethod
@@ -235,7 +230,12 @@ class _AskTell:
     def done(self) -> bool: ...
     @property
     def nfev(self) -> int: ...
+    @property
+    def final_asked(self) -> bool: ...
     def best(self) -> tuple[Any, float] | None: ...
+    def sigma(self) -> float: ...
+    def last_step(self) -> tuple[int, Any, float, float, Any, int] | None: ...
+    def partial(self) -> dict[str, Any] | None: ...
     def result(self) -> dict[str, Any] | None: ...
 
 class _LeastSquares:
@@ -276,14 +276,6 @@ def _minimize(
     settings: str | None = None,
     keep_history: int | None = None,
 ) -> dict[str, Any]: ...
-def _minimize_adaptive(
-    fun: Any,
-    x0: Any,
-    options: _AdaptiveOptions,
-    batched: bool = False,
-    seeded: bool = False,
-    callback: Any = None,
-) -> dict[str, Any]: ...
 def _rust_reference_estimates(
     x: Any,
     sigma: float,
@@ -313,4 +305,5 @@ def _rust_reference_minimize_adaptive(
     paper: tuple[int, float, float] | None = None,
     polish: float | None = None,
 ) -> dict[str, Any]: ...
+def _replace_file(path: str, data: bytes) -> None: ...
 def _rust_seconds_per_evaluation(dim: int = 10, samples: int = 10000, repeats: int = 5) -> float: ...

@@ -1,219 +1,307 @@
-"""The options of :func:`plateau_free.minimize` and :func:`plateau_free.ask_tell`, checked and with
-their defaults filled in: the method and the options it takes, every option's type and range
-(each error names the option and shows its value as given), ``x0``, the bounds, the adaptive
-search's and the paper loop's options."""
+"""The options of :func:`plateau_free.minimize` and :func:`plateau_free.ask_tell`, declared once:
+:data:`_OPTIONS` holds each option's check, the methods that take it, whether :func:`ask_tell`
+takes it too, and its documentation (both functions' docstrings are made from it);
+:class:`Options` holds its type. Adding an option is a row in each (and, for an option of the
+Rust ``Minimizer``, a field in ``python/src/convert.rs``'s ``AdaptiveOptions``).
+
+Here too: the check of a whole call (the method, the options it takes, ``x0``, the bounds,
+the combinations), and the options in the forms the runs take."""
 
 from __future__ import annotations
 
 import dataclasses
-import math
+import difflib
 import os
-import sys
-from typing import Any, Callable, Optional, Union, cast
+from typing import TYPE_CHECKING, Any, Callable, NamedTuple, Optional, Sequence, TypedDict, Union, cast
 
 import numpy as np
 
 from . import _native
-from ._native import PAPER_SIGMA_MIN, Adam, Annealer, OptionTypeError
-from ._types import _ScheduleName
+from ._checks import (
+    _annealer,
+    _arguments,
+    _box,
+    _callable,
+    _counter,
+    _flag,
+    _fraction,
+    _not_nan,
+    _path,
+    _policy,
+    _positive,
+    _sampling,
+    _seed,
+    _show,
+    _spread,
+    _start,
+    _whole,
+    _window,
+    _workers,
+)
+from ._native import DEFAULT_POLISH as _DEFAULT_POLISH
+from ._native import PAPER_SIGMA_MIN, Adam, Annealer
+from ._types import _Bounds, _SamplingName, _ScheduleName
 
-_USIZE_MAX = sys.maxsize * 2 + 1  # the largest count the Rust side takes (usize)
-_U64_MAX = 2**64 - 1
-
-
-def _show(value: Any) -> str:
-    """``value`` as the user wrote it: its repr (a numpy scalar as the Python number it holds),
-    cut to 80 characters."""
-    if isinstance(value, np.generic):
-        value = value.item()
-    text = repr(value)
-    return text if len(text) <= 80 else text[:77] + "..."
-
-
-def _limit(highest: int) -> str:
-    return "2**64 - 1" if highest == _U64_MAX else str(highest)
-
-
-def _is_bool(value: Any) -> bool:
-    return isinstance(value, (bool, np.bool_))
-
-
-def _is_real(value: Any) -> bool:
-    """Whether ``value`` is a real number (an int or a float, numpy's included; not a bool)."""
-    return isinstance(value, (int, float, np.integer, np.floating)) and not _is_bool(value)
-
-
-def _whole(name: str, value: Any, lowest: int, highest: int = _USIZE_MAX, what: str = "") -> int:
-    """``value`` as an int in ``[lowest, highest]``: an int (numpy's included) or a float with a
-    whole value (``1e4``); OptionTypeError for a non-number, ValueError for another number."""
-    must = f"{name} = {_show(value)} must be a whole number{what} from {lowest} to {_limit(highest)}"
-    if not _is_real(value):
-        raise OptionTypeError(must)
-    if isinstance(value, (float, np.floating)):
-        if not (math.isfinite(value) and float(value).is_integer()):
-            raise ValueError(must)
-    number = int(value)
-    if not lowest <= number <= highest:
-        raise ValueError(must)
-    return number
+if TYPE_CHECKING:
+    from concurrent.futures import Executor
 
 
-def _as_float(value: Any, must: str) -> float:
-    """A real number (see :func:`_is_real`) as a float: ValueError naming it when it is an int
-    too large for a float (``10**400``), not Python's OverflowError."""
-    try:
-        return float(value)
-    except OverflowError as e:
-        raise ValueError(f"{must}: it is too large for a float") from e
+class Options(TypedDict, total=False):
+    """The types of the options of :func:`minimize` and :func:`ask_tell` (documented in
+    :data:`_OPTIONS`, the one place that checks them)."""
+
+    budget: Optional[int]
+    seed: Optional[int]
+    sigma0: Union[float, Sequence[float], None]
+    bounds: Optional[_Bounds]
+    args: Any
+    batched: bool
+    seeded: bool
+    callback: Optional[Callable[..., Any]]
+    on_failure: str
+    workers: Union[int, Executor, Callable[..., Any], None]
+    disp: Optional[bool]
+    checkpoint: Union[str, os.PathLike[str], None]
+    checkpoint_every: Optional[int]
+    keep_history: Optional[int]
+    target: Optional[float]
+    population: Optional[int]
+    restarts: Optional[bool]
+    patience: Optional[int]
+    polish: Optional[float]
+    stop_when_stalled: Optional[float]
+    iterations: Optional[int]
+    lr: Optional[float]
+    samples: Optional[int]
+    sampling: Optional[_SamplingName]
+    antithetic: Optional[bool]
+    annealer: Union[_ScheduleName, Annealer, None]
+    sigma_min: Optional[float]
+    step: Optional[float]
+    orthogonal: Optional[bool]
+    parallel: Optional[bool]
+    record_x: Optional[bool]
+    final_evaluation: Optional[bool]
 
 
-def _positive(name: str, value: Any) -> float:
-    must = f"{name} = {_show(value)} must be a finite number > 0"
-    if not _is_real(value):
-        raise OptionTypeError(must)
-    number = _as_float(value, must)
-    if not (math.isfinite(number) and number > 0):
-        raise ValueError(must)
-    return number
+class _Option(NamedTuple):
+    """One option: its check (name, value) -> the value the run uses; the methods that take
+    it; whether :func:`ask_tell` takes it (else it is :func:`minimize`'s alone); its type and
+    documentation as the docstrings show them."""
+
+    check: Callable[[str, Any], Any]
+    methods: frozenset[str]
+    ask_tell: bool
+    kind: str
+    doc: str
 
 
-def _fraction(name: str, value: Any) -> float:
-    must = (
-        f"{name} = {_show(value)} must be a fraction of the budget in [0, 1) "
-        "(the share the adaptive search gets after the paper's loop)"
-    )
-    if not _is_real(value):
-        raise OptionTypeError(must)
-    if not 0.0 <= value < 1.0:
-        raise ValueError(must)
-    return float(value)
+_ALL = frozenset({"adaptive", "polished", "plateau", "fd", "spsa"})
+_SEARCH = frozenset({"adaptive", "polished"})  # the Rust Minimizer's runs
+_LOOP = frozenset({"plateau", "fd", "spsa"})  # the paper's loop and its baselines
+_DRIVEN = frozenset({"adaptive", "polished", "plateau"})  # runs of the ask-and-tell driver
 
 
-def _window(name: str, value: Any) -> float:
-    """``stop_when_stalled``: a fraction of the budget in ``(0, 1]`` (NaN fails the test)."""
-    must = (
-        f"{name} = {_show(value)} must be a fraction of the budget in (0, 1] (the window over "
-        "which the best value must improve; plateau_free.STALL_WINDOW = 0.2 is the tested choice)"
-    )
-    if not _is_real(value):
-        raise OptionTypeError(must)
-    if not 0.0 < value <= 1.0:
-        raise ValueError(must)
-    return float(value)
+def _row(check: Callable[[str, Any], Any], methods: frozenset[str], kind: str, doc: str,
+         ask_tell: bool = True) -> _Option:  # fmt: skip
+    return _Option(check, methods, ask_tell, kind, doc)
 
 
-def _not_nan(name: str, value: Any) -> float:
-    must = f"{name} = {_show(value)} must be a number (not NaN)"
-    if not _is_real(value):
-        raise OptionTypeError(must)
-    number = _as_float(value, must)
-    if math.isnan(number):
-        raise ValueError(must)
-    return number
-
-
-def _flag(name: str, value: Any) -> bool:
-    if not _is_bool(value):
-        raise OptionTypeError(f"{name} = {_show(value)} must be True or False")
-    return bool(value)
-
-
-def _callable(name: str, value: Any) -> Callable[..., Any]:
-    if not callable(value):
-        raise OptionTypeError(f"{name} = {_show(value)} must be callable")
-    return cast(Callable[..., Any], value)
-
-
-def _path(name: str, value: Any) -> str:
-    if not isinstance(value, (str, os.PathLike)):
-        raise OptionTypeError(f"{name} = {_show(value)} must be a path (a str or an os.PathLike)")
-    return os.fspath(value)
-
-
-_SAMPLERS = ("radial", "per_coordinate", "gaussian")
-_SCHEDULES = ("paper", "constant", "exponential", "cosine")
-
-
-def _sampling(name: str, value: Any) -> str:
-    must = f"{name} = {_show(value)} is not a sampler: use 'radial', 'per_coordinate' or 'gaussian'"
-    if not isinstance(value, str):
-        raise OptionTypeError(must)
-    spelt = str(value).lower().replace("-", "_").replace(" ", "_")  # a Sampling's value
-    spelt = "per_coordinate" if spelt == "percoordinate" else spelt
-    if spelt not in _SAMPLERS:
-        raise ValueError(must)
-    return spelt
-
-
-def _annealer(name: str, value: Any) -> Union[str, Annealer]:
-    must = (
-        f"{name} = {_show(value)} is not a schedule: use 'paper', 'constant', 'exponential', "
-        "'cosine' or an Annealer"
-    )
-    if isinstance(value, Annealer):
-        return value
-    if not isinstance(value, str):
-        raise OptionTypeError(must)
-    if value.lower() not in _SCHEDULES:
-        raise ValueError(must)
-    return value.lower()
-
-
-def _counter(lowest: int, what: str = "") -> Callable[[str, Any], int]:
-    return lambda name, value: _whole(name, value, lowest, what=what)
-
-
-# Every option's check (bounds aside: it needs x0); each returns the value in the form the run
-# uses.
-_CHECKS: dict[str, Callable[[str, Any], Any]] = {
-    "budget": _counter(1, " of evaluations"),
-    "seed": lambda name, value: _whole(name, value, 0, _U64_MAX),
-    "sigma0": _positive,
-    "lr": _positive,
-    "sigma_min": _positive,
-    "step": _positive,
-    "iterations": _counter(1),
-    "samples": _counter(1),
-    "population": _counter(2),
-    "checkpoint_every": _counter(0, " of iterations"),
-    "keep_history": _counter(1, " of iterations"),
-    "target": _not_nan,
-    "polish": _fraction,
-    "stop_when_stalled": _window,
-    "sampling": _sampling,
-    "annealer": _annealer,
-    "callback": _callable,
-    "checkpoint": _path,
-    **{
-        flag: _flag
-        for flag in ("antithetic", "orthogonal", "parallel", "record_x", "final_evaluation",
-                     "restarts", "batched", "seeded")
-    },
+_OPTIONS: dict[str, _Option] = {
+    "budget": _row(_counter(1, " of evaluations"), _ALL, "int, optional", """
+        The most evaluations of ``fun`` the run spends, its final evaluation included:
+        ``nfev <= budget`` always. Adaptive: default ``1000 * x0.size``. Polished: required.
+        The paper's loop: when ``iterations`` is not given, as many iterations as the budget
+        pays for, ``(budget - 1) // samples`` (``(budget - 1) // 2n`` for ``'fd'``, ``// 2``
+        for ``'spsa'``; ``budget // ...`` with ``final_evaluation=False``); a budget that
+        cannot pay for one iteration (and the final evaluation), or fewer than the
+        ``iterations`` given need, is a ValueError."""),
+    "seed": _row(_seed, _ALL, "int or None", """
+        The seed of every random choice, from 0 to 2**64 - 1 (default 0): the result is a
+        function of ``fun``, ``x0``, the options and the seed alone (bit for bit the Rust
+        side's). None: a fresh seed from the operating system. ``result.seed`` records the
+        seed used, to run the same again."""),
+    "sigma0": _row(_spread, frozenset({"adaptive", "polished", "plateau", "spsa"}),
+                   "float or sequence of floats, optional", """
+        The initial spread. Adaptive: default a quarter of the mean box width with finite
+        ``bounds``, else ``max(1, max|x0|) / 2``; a sequence gives one spread per coordinate
+        (parameters of different scales); it adapts from there. The paper's loop and
+        polished: one number, default 0.5 (the paper recommends about half the parameter
+        domain)."""),
+    "bounds": _row(lambda name, value: value, _ALL, "optional", """
+        Box bounds: a sequence of ``(lower, upper)`` pairs, one per coordinate, one pair for
+        all coordinates, or a ``scipy.optimize.Bounds``; ``None`` or an infinity leaves that
+        side open (``(None, 2)``); ``x0`` must lie inside. Adaptive and polished: every
+        evaluated point is projected onto the box. The paper's loop: Adam projects after
+        every step."""),
+    "args": _row(_arguments, _ALL, "tuple, optional", """
+        Extra arguments of ``fun``, as scipy's: ``fun(x, *args)`` (``fun(x, seed, *args)``
+        when seeded).""", ask_tell=False),
+    "batched": _row(_flag, _ALL, "bool", """
+        ``fun(X) -> N values`` for ``X`` of shape ``(N, *x0.shape)``, called once per
+        iteration with its whole population (default False).""", ask_tell=False),
+    "seeded": _row(_flag, _ALL, "bool", """
+        ``fun(x, seed)`` (``fun(X, seeds)`` when also batched, ``seeds`` a uint64 array):
+        adaptive gives every point of an iteration the same seed (common random numbers), a
+        new one each iteration (default False).""", ask_tell=False),
+    "callback": _row(_callable, _ALL, "callable, optional", """
+        Called after every iteration, as in scipy: ``callback(intermediate_result)`` when its
+        only parameter is named ``intermediate_result``, else ``callback(x)``. Returning a
+        true value or raising ``StopIteration`` stops the run (``status`` 99); the result is
+        then the best point so far (adaptive, polished) or the current iterate (the paper's
+        loop). The paper's loop passes ``x``, ``fun`` (the iteration's mean value), ``nit``,
+        ``nfev``, ``sigma`` and ``jac`` (the gradient estimate); adaptive the best ``x`` and
+        ``fun`` so far, with ``nit`` and ``nfev``.""", ask_tell=False),
+    "on_failure": _row(_policy, _DRIVEN, "'continue' or 'raise'", """
+        What a failed evaluation does: NaN, an infinity, or an exception raised by ``fun``
+        (an ``Exception``; Ctrl-C is not a failure). ``'continue'`` (default): the point
+        ranks below every finite value (the paper's loop redraws the estimate), the run goes
+        on and ``result.nfail`` counts it; a run whose every evaluation raised raises the
+        first exception. ``'raise'``: the run ends with the exception (a ValueError for NaN
+        or an infinity) and ``exc.result`` holds the result so far, its best point
+        included. Not an option of the baselines (``'fd'``, ``'spsa'``), which end on the
+        first failure."""),
+    "workers": _row(_workers, _DRIVEN, "int, Executor or callable, optional", """
+        Where an iteration's points are evaluated: a number of threads, a
+        ``concurrent.futures.Executor`` (its ``map``), or a map-like callable
+        ``workers(function, points)`` (scipy's ``differential_evolution`` convention; a
+        process pool needs ``fun`` to pickle). The result is bit for bit the run of one
+        worker (default 1: in this thread).""", ask_tell=False),
+    "disp": _row(_flag, _DRIVEN, "bool, optional", """
+        Print a plain progress line every few seconds and at the end, in the words of the
+        library's ``ProgressLine`` (iteration, evaluations of the budget, best value, spread,
+        time; failures when any; default False).""", ask_tell=False),
+    "checkpoint": _row(_path, _ALL, "str or path, optional", """
+        A file that keeps the run's state and what the run is (the method, ``x0``, the
+        options, the seed, ``fun``'s ``module.qualname``). Written atomically every
+        ``checkpoint_every`` iterations (default about every 30 seconds), at the end, on
+        Ctrl-C and when ``fun`` or ``callback`` raises. If the file exists, the run continues
+        from it and ends bit for bit as the run never interrupted; ``result.from_checkpoint``
+        is True and ``result.message`` names the file. A file of another run (another
+        ``fun``, ``x0``, option...), or a damaged one, is a ValueError naming the path and the
+        difference, and is not used.""", ask_tell=False),
+    "checkpoint_every": _row(_counter(0, " of iterations"), _ALL, "int, optional", """
+        Iterations between checkpoints; 0: only at the end, on Ctrl-C and on an exception
+        (default: about every 30 seconds).""", ask_tell=False),
+    "keep_history": _row(_counter(1, " of iterations"), _ALL, "int, optional", """
+        How many of the last iterations ``result.history`` keeps (default a million, so that
+        a run of any length has bounded memory); ``history.dropped`` counts the others."""),
+    "target": _row(_not_nan, _SEARCH, "float, optional", """
+        Adaptive, polished: stop as soon as ``fun`` reaches ``target`` or below."""),
+    "population": _row(_counter(2), _SEARCH, "int, optional", """
+        Adaptive, polished: the population of the first run (default ``4 + floor(3 ln n)``,
+        at least 2); each restart doubles it."""),
+    "restarts": _row(_flag, _SEARCH, "bool, optional", """
+        Adaptive, polished: restart from the best point with a doubled population when a run
+        converges or stalls while budget remains (default True)."""),
+    "patience": _row(_counter(0, " of restarts"), _SEARCH, "int, optional", """
+        Adaptive, polished: how many restarts in a row must converge back at the best point
+        seen before them for the run to be done before its budget (status 0, ``success``
+        True, the message says so); default 1 (``Minimizer::patience``); 0: the budget, the
+        target or the stall rule alone end the run."""),
+    "polish": _row(_fraction, frozenset({"polished"}), "float, optional", """
+        Polished: the fraction of ``budget``, in ``[0, 1)``, that the adaptive search gets
+        after the paper's loop (default 0.5, as the Rust ``Minimizer`` and the path tracer;
+        0: the loop alone, its best point returned)."""),
+    "stop_when_stalled": _row(_window, _SEARCH, "float, optional", """
+        Adaptive, polished: end the run once the best value has not improved over the last
+        ``stop_when_stalled * budget`` evaluations, a fraction in ``(0, 1]``
+        (:data:`STALL_WINDOW` is the tested choice); status 0 with a message saying it
+        stalled. Default None: off."""),
+    "iterations": _row(_counter(1), _LOOP, "int, optional", """
+        The paper's loop: iterations to run; default the annealer's length if ``annealer``
+        is an :class:`Annealer`, else as many as ``budget`` pays for, else 400."""),
+    "lr": _row(_positive, _LOOP | {"polished"}, "float, optional", """
+        Adam's learning rate (the paper's loop and polished; default 0.02)."""),
+    "samples": _row(_counter(1), frozenset({"plateau", "polished"}), "int, optional", """
+        Evaluations per gradient estimate, as for :class:`PlateauFreeGradient` (default 2;
+        even with antithetic pairs)."""),
+    "sampling": _row(_sampling, frozenset({"plateau"}), "str, optional", """
+        The sampler, as for :class:`PlateauFreeGradient` (default ``'radial'``)."""),
+    "antithetic": _row(_flag, frozenset({"plateau"}), "bool, optional", """
+        Antithetic pairs, as for :class:`PlateauFreeGradient` (default True)."""),
+    "orthogonal": _row(_flag, frozenset({"plateau"}), "bool, optional", """
+        Orthogonal directions, as for :class:`PlateauFreeGradient` (default False)."""),
+    "parallel": _row(_flag, frozenset({"plateau"}), "bool, optional", """
+        Evaluate an estimate's points on threads (as ``workers=os.cpu_count()``; default
+        False).""", ask_tell=False),
+    "annealer": _row(_annealer, frozenset({"plateau", "spsa"}), "str or Annealer, optional", """
+        The paper's loop: ``'paper'`` (default: sigma0 for half the run, then linear to
+        ``sigma_min``), ``'constant'``, ``'exponential'``, ``'cosine'``, or an
+        :class:`Annealer` (then ``sigma0`` and ``sigma_min`` are its own)."""),
+    "sigma_min": _row(_positive, frozenset({"plateau", "spsa"}), "float, optional", """
+        The final spread of the decaying schedules (the paper's 0.01)."""),
+    "step": _row(_positive, frozenset({"fd"}), "float, optional", """
+        ``'fd'`` alone: the finite difference's step (default 1e-3).""", ask_tell=False),
+    "record_x": _row(_flag, _LOOP, "bool, optional", """
+        The paper's loop: keep ``x`` after every iteration in ``history.x`` (default
+        False)."""),
+    "final_evaluation": _row(_flag, _LOOP, "bool, optional", """
+        The paper's loop: evaluate ``fun`` once at the final ``x`` for ``result.fun`` (default
+        True; it counts in ``nfev`` and ``budget``). False: ``result.fun`` is the last
+        iteration's mean value."""),
 }  # fmt: skip
 
-# The options with a default other than None: None given for them is a bad value, not "not
-# given".
+# The options whose None is a bad value, not "not given" (seed: None is fresh entropy).
 _ALWAYS_CHECKED = ("seed", "batched", "seeded")
 
-# The options each method takes (besides fun, x0 and method).
-_ADAPTIVE = {
-    "budget", "seed", "sigma0", "bounds", "target", "population", "restarts", "batched", "seeded",
-    "callback", "stop_when_stalled",
-}  # fmt: skip
-_LOOP = {
-    "budget", "seed", "bounds", "batched", "seeded", "callback", "iterations", "lr", "record_x",
-    "keep_history", "final_evaluation", "checkpoint", "checkpoint_every",
-}  # fmt: skip
-_SPSA = _LOOP | {"sigma0", "annealer", "sigma_min"}
-_PLATEAU = _SPSA | {"samples", "sampling", "antithetic", "orthogonal", "parallel"}
-_TAKES = {
-    "adaptive": _ADAPTIVE,
-    "plateau": _PLATEAU,
-    "polished": _ADAPTIVE | {"lr", "samples", "polish"},
-    "fd": _LOOP | {"step"},
-    "spsa": _SPSA,
+# Names users bring from other libraries, and the word to use here.
+_SAY_INSTEAD = {
+    "maxiter": "budget= (evaluations of fun; iterations= for the paper's loop)",
+    "maxfev": "budget= (evaluations of fun)",
+    "maxfun": "budget= (evaluations of fun)",
+    "max_evals": "budget= (evaluations of fun)",
+    "tol": "target= (a value to stop at) or stop_when_stalled= (a window of the budget)",
+    "ftol": "target= (a value to stop at) or stop_when_stalled= (a window of the budget)",
+    "xtol": "target= (a value to stop at) or stop_when_stalled= (a window of the budget)",
+    "fatol": "target= (a value to stop at) or stop_when_stalled= (a window of the budget)",
+    "options": "each option as a keyword of its own: minimize(fun, x0, budget=..., seed=...)",
+    "rng": "seed=",
+    "random_state": "seed=",
+    "verbose": "disp=",
+    "x0": "the second positional argument",
 }
-_ASK_TELL_LEAVES = {"batched", "seeded", "callback", "parallel", "checkpoint", "checkpoint_every"}
+
+
+def _refuse_unknown(where: str, options: dict[str, Any]) -> None:
+    """A TypeError naming each keyword that is no option, and the word to use instead."""
+    for name in options:
+        if name in _OPTIONS:
+            continue
+        hint = _SAY_INSTEAD.get(name)
+        if hint is None:
+            close = difflib.get_close_matches(name, list(_OPTIONS), n=1)
+            hint = f"{close[0]}=" if close else "one of " + ", ".join(sorted(_OPTIONS))
+        raise TypeError(f"{where}() got an unexpected keyword argument {name!r}: use {hint}")
+
+
+def _owners(name: str) -> str:
+    methods = [f"'{m}'" for m in _METHODS if m in _OPTIONS[name].methods]
+    return methods[0] if len(methods) == 1 else ", ".join(methods[:-1]) + " or " + methods[-1]
+
+
+_METHODS = ("adaptive", "plateau", "polished", "fd", "spsa")
+
+
+def _takes(method: str, where: str) -> set[str]:
+    """The options ``method`` takes in ``where`` (``'minimize'`` or ``'ask_tell'``)."""
+    return {
+        name
+        for name, option in _OPTIONS.items()
+        if method in option.methods and (where == "minimize" or option.ask_tell)
+    }
+
+
+def _options_doc(where: str, indent: str = "    ") -> str:
+    """The Parameters entries of every option of ``where``, for its docstring."""
+    lines = []
+    for name, option in _OPTIONS.items():
+        if where == "ask_tell" and not option.ask_tell:
+            continue
+        lines.append(f"{indent}{name} : {option.kind}")
+        body = [line.strip() for line in option.doc.strip().splitlines()]
+        lines.extend(f"{indent}    {line}" for line in body)
+    return "\n".join(lines)
 
 
 def _method(method: Any, where: str) -> str:
@@ -227,21 +315,16 @@ def _method(method: Any, where: str) -> str:
     if method is None:
         return "adaptive"
     if not isinstance(method, str):
-        raise OptionTypeError(f"method = {_show(method)} is not a method: use {names}")
+        raise _native.OptionTypeError(f"method = {_show(method)} is not a method: use {names}")
     chosen = {"paper": "plateau"}.get(method.lower(), method.lower())
-    if chosen not in _TAKES or (where == "ask_tell" and chosen in ("fd", "spsa")):
+    if chosen not in _METHODS or (where == "ask_tell" and chosen in ("fd", "spsa")):
         raise ValueError(f"method = {_show(method)} is not a method of {where}: use {names}")
     return chosen
 
 
-def _owners(name: str) -> str:
-    methods = [f"'{m}'" for m, takes in _TAKES.items() if name in takes]
-    return methods[0] if len(methods) == 1 else ", ".join(methods[:-1]) + " or " + methods[-1]
-
-
 def _refuse_foreign(method: str, given: dict[str, Any], where: str) -> None:
     """A ValueError naming every option given that ``method`` does not take, with its value."""
-    takes = _TAKES[method] - (_ASK_TELL_LEAVES if where == "ask_tell" else set())
+    takes = _takes(method, where)
     foreign = [name for name in given if name not in takes]
     if foreign:
         default = " (the default method)" if method == "adaptive" else ""
@@ -254,110 +337,41 @@ def _refuse_foreign(method: str, given: dict[str, Any], where: str) -> None:
         )
 
 
-def _start(x0: Any) -> np.ndarray:
-    """``x0`` as a float64 array: an array of finite numbers, at least one."""
-    if x0 is None or isinstance(x0, (str, bytes)):
-        raise OptionTypeError(f"x0 = {_show(x0)} must be an array of numbers (the start)")
-    try:
-        raw = np.asarray(x0)
-        if raw.dtype.kind not in "biufO":
-            raise TypeError(f"its elements are of dtype {raw.dtype}")
-        array = np.asarray(raw, dtype=np.float64)
-    except OverflowError as e:  # an int too large for a float: a number, but not a finite one
-        raise ValueError(f"x0 = {_show(x0)} is not an array of finite numbers: {e}") from e
-    except (TypeError, ValueError) as e:
-        raise OptionTypeError(f"x0 = {_show(x0)} is not an array of numbers: {e}") from e
-    if array.size == 0:
-        raise ValueError(
-            f"x0 = {_show(x0)} is empty (shape {array.shape}): the objective needs at least one parameter"
-        )
-    bad = np.flatnonzero(~np.isfinite(array))
-    if bad.size:
-        index = np.unravel_index(int(bad[0]), array.shape)
-        element = raw[index] if raw.ndim else raw.item()
-        where = ", ".join(str(int(i)) for i in index)
-        raise ValueError(f"x0[{where}] = {_show(element)} is not finite")
-    return array
-
-
-def _pair(i: int, pair: Any) -> tuple[float, float]:
-    """``bounds[i]``: a ``(lower, upper)`` pair of numbers or None."""
-    must = f"bounds[{i}] = {_show(pair)} must be a (lower, upper) pair of numbers or None"
-    try:
-        items = tuple(pair)
-    except TypeError as e:
-        raise OptionTypeError(must) from e
-    if len(items) != 2 or not all(b is None or _is_real(b) for b in items):
-        raise OptionTypeError(must)
-    lower = -math.inf if items[0] is None else _as_float(items[0], must)
-    upper = math.inf if items[1] is None else _as_float(items[1], must)
-    if math.isnan(lower) or math.isnan(upper):
-        raise ValueError(f"bounds[{i}] = {_show(pair)}: NaN is not a bound (None is no bound)")
-    if lower > upper:
-        raise ValueError(
-            f"bounds[{i}] = {_show(pair)}: lower {_show(items[0])} > upper {_show(items[1])}"
-        )
-    return lower, upper
-
-
-def _box(bounds: Any, x0: np.ndarray, given: Any, method: str) -> tuple[list[float], list[float]]:
-    """``(lower, upper)`` lists of ``x0.size`` numbers from scipy-style bounds; ``x0`` (``given``
-    as the user wrote it) must lie inside; finite bounds for the adaptive search."""
-    n = x0.size
-    if hasattr(bounds, "lb") and hasattr(bounds, "ub"):  # scipy.optimize.Bounds
-        try:
-            lb = np.broadcast_to(np.asarray(bounds.lb, dtype=float), x0.shape).ravel()
-            ub = np.broadcast_to(np.asarray(bounds.ub, dtype=float), x0.shape).ravel()
-        except (TypeError, ValueError, OverflowError) as e:
-            raise ValueError(
-                f"bounds = {_show(bounds)}: lb and ub must fit x0's shape {x0.shape}: {e}"
-            ) from e
-        items: list[Any] = list(zip(lb.tolist(), ub.tolist()))
-    else:
-        if isinstance(bounds, (str, bytes)) or not hasattr(bounds, "__iter__"):
-            raise OptionTypeError(
-                f"bounds = {_show(bounds)} must be (lower, upper) pairs, one per coordinate of x0, "
-                "a single pair, or a scipy.optimize.Bounds"
-            )
-        items = list(bounds)
-        if len(items) == 2 and all(b is None or np.ndim(b) == 0 for b in items):
-            items = [tuple(items)]  # one (lower, upper) pair for every coordinate
-        if len(items) == 1:
-            items = items * n
-        if len(items) != n:
-            raise ValueError(
-                f"bounds has {len(items)} (lower, upper) pairs, x0 has {n} coordinates: "
-                "give one pair per coordinate or a single pair for all"
-            )
-    pairs = [_pair(i, b) for i, b in enumerate(items)]
-    start = np.asarray(given, dtype=object).ravel()
-    for i, ((lo, hi), v) in enumerate(zip(pairs, x0.ravel().tolist())):
-        if method in ("adaptive", "polished") and not (math.isfinite(lo) and math.isfinite(hi)):
-            raise ValueError(
-                f"bounds[{i}] = {_show(items[i])}: method={method!r} needs finite bounds "
-                "(the box sets the starting spread and where restarts go)"
-            )
-        if not lo <= v <= hi:
-            raise ValueError(
-                f"x0[{i}] = {_show(start[i])} is outside bounds[{i}] = {_show(items[i])}"
-            )
-    return [p[0] for p in pairs], [p[1] for p in pairs]
-
-
 def _check_call(
     where: str, method: Any, x0: Any, options: dict[str, Any]
 ) -> tuple[str, np.ndarray, dict[str, Any]]:
     """The method, ``x0`` and the options of a :func:`minimize` (``where='minimize'``) or
-    :func:`ask_tell` call, checked: the options given (not None) that the method does not
-    take, then each option's type and range, ``x0``, the bounds. Returns the options given,
-    each in the form the run uses."""
+    :func:`ask_tell` call, checked: keywords that are no option (a TypeError naming the word
+    to use), the options given (not None) that the method does not take, then each option's
+    type and range, ``x0``, the bounds, the combinations. Returns the options given, each in
+    the form the run uses, with ``seed``, ``batched``, ``seeded`` and ``on_failure`` always
+    there."""
+    _refuse_unknown(where, options)
     chosen = _method(method, where)
     given = {k: v for k, v in options.items() if v is not None or k in _ALWAYS_CHECKED}
     _refuse_foreign(chosen, given, where)
-    checked = {n: _CHECKS[n](n, value) for n, value in given.items() if n != "bounds"}
+    checked = {n: _OPTIONS[n].check(n, value) for n, value in given.items() if n != "bounds"}
+    checked = {"seed": 0, "batched": False, "seeded": False, "on_failure": "continue", **checked}
     start = _start(x0)
     if "bounds" in given:
-        checked["bounds"] = _box(given["bounds"], start, x0, chosen)
+        checked["bounds"] = _box(given["bounds"], start, x0)
+    spread = checked.get("sigma0")
+    if isinstance(spread, list):
+        if chosen != "adaptive":
+            raise ValueError(
+                f"sigma0 = {_show(options['sigma0'])}: method={chosen!r} takes one number "
+                "(one spread per coordinate is method='adaptive''s)"
+            )
+        if len(spread) != start.size:
+            raise ValueError(
+                f"sigma0 has {len(spread)} spreads, x0 has {start.size} coordinates: give one "
+                "number or one per coordinate"
+            )
+    if checked["batched"] and checked.get("workers", 1) != 1:
+        raise ValueError(
+            f"workers = {_show(options['workers'])}: a batched fun evaluates its batch itself; "
+            "give batched=False to spread the points over workers"
+        )
     if chosen == "polished" and "budget" not in checked:
         raise ValueError(
             "budget: method='polished' needs one (the paper's loop spends the first "
@@ -402,10 +416,12 @@ def _adaptive_options(
     """The options of ``method='adaptive'`` (and, with ``paper`` and ``polish``, of
     ``method='polished'``) as the Rust side takes them, the same for :func:`minimize` and
     :func:`ask_tell`."""
+    spread = None if paper is not None else checked.get("sigma0")
     return {
         "budget": checked.get("budget"),
         "seed": checked.get("seed", 0),
-        "sigma0": None if paper is not None else checked.get("sigma0"),
+        "sigma0": spread if not isinstance(spread, list) else None,
+        "sigma0_each": spread if isinstance(spread, list) else None,
         "bounds": checked.get("bounds"),
         "target": checked.get("target"),
         "population": checked.get("population"),
@@ -413,19 +429,21 @@ def _adaptive_options(
         "paper": paper,
         "polish": polish,
         "stall": checked.get("stop_when_stalled"),
+        "on_failure": checked.get("on_failure", "continue"),
+        "patience": checked.get("patience"),
     }
 
 
 def _polished_options(checked: dict[str, Any]) -> _native._AdaptiveOptions:
     """``method='polished'``: the paper loop's ``(samples, lr, sigma0)`` (the paper loop's
-    defaults) and the polish fraction (default a quarter), with the adaptive search's options."""
+    defaults) and the polish fraction (default half the budget), with the adaptive search's options."""
     defaults = _PaperOptions()
     paper = (
         int(checked.get("samples", defaults.samples)),
         float(checked.get("lr", defaults.lr)),
         float(checked.get("sigma0", defaults.sigma0)),
     )
-    return _adaptive_options(checked, paper, float(checked.get("polish", 0.25)))
+    return _adaptive_options(checked, paper, float(checked.get("polish", _DEFAULT_POLISH)))
 
 
 @dataclasses.dataclass

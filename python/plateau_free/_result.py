@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import inspect
 import math
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Optional, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -32,11 +32,13 @@ class OptimizeResult(dict[str, Any]):
         Whether the run ended by its own test of success, as in scipy: True when ``fun``
         reached ``target`` or the search converged (``restarts=False``); False when the budget
         or the iterations ran out (the run could not tell whether ``x`` is a minimum) or the
-        callback stopped the run. Failures raise instead.
+        callback, Ctrl-C or an exception stopped the run.
     status : int
-        As scipy's: 0 success (target reached, converged); 1 the budget spent (adaptive,
-        polished) or all iterations done (the paper's loop, which never tests for
-        convergence); 99 stopped by the callback (it returned a true value or raised
+        As scipy's: 0 success (target reached, converged, done); 1 the budget spent
+        (adaptive, polished) or all iterations done (the paper's loop, which never tests for
+        convergence); 2 interrupted (Ctrl-C: ``KeyboardInterrupt`` raised by ``fun`` or by the
+        signal); 3 ended by an exception (the result an exception carries as
+        ``exc.result``); 99 stopped by the callback (it returned a true value or raised
         ``StopIteration``).
     message : str
         What happened, in words: ``'target reached'``, ``'converged'``, ``'budget spent:
@@ -49,11 +51,19 @@ class OptimizeResult(dict[str, Any]):
         the callback).
     sigma : float or None
         Adaptive and polished only: the spread at the end (None when stopped by the callback).
-    history : History or None
-        The paper's loop: per-iteration records. Adaptive, polished: None.
+    history : History, SearchHistory or None
+        The paper's loop: per-iteration records (:class:`History`). Adaptive, polished: the
+        best value, the spread and the evaluations after each iteration
+        (:class:`SearchHistory`; :func:`plateau_free.plot_history` draws it). None from
+        :attr:`AskTell.result` of the adaptive search.
+    nfail : int
+        Failed evaluations (NaN, an infinity, an exception raised by ``fun``) that the run
+        went on after (``on_failure='continue'``).
+    seed : int
+        The seed the run used (drawn afresh for ``seed=None``).
     from_checkpoint : bool
-        The paper's loop alone: whether iterations of the run were read from the checkpoint
-        file (``minimize(..., checkpoint=path)``) instead of being run by this call.
+        Whether the run was read from the checkpoint file (``minimize(...,
+        checkpoint=path)``) instead of being run whole by this call.
     """
 
     x: _FloatArray
@@ -63,7 +73,9 @@ class OptimizeResult(dict[str, Any]):
     success: bool
     status: int
     message: str
-    history: Optional[History]
+    history: Optional[Union[History, SearchHistory]]
+    nfail: int
+    seed: int
     restarts: Optional[int]
     sigma: Optional[float]
     from_checkpoint: bool
@@ -142,14 +154,57 @@ class History:
         return f"History({len(self)} iterations{dropped}, x {recorded})"
 
 
+class SearchHistory:
+    """The adaptive search's record of a :func:`minimize` run (``method='adaptive'`` or
+    ``'polished'``): one row per iteration (a generation, or an estimate of the paper's loop
+    before the polish), the last ``keep_history`` of them.
+
+    Attributes
+    ----------
+    nfev : numpy.ndarray
+        Evaluations of ``fun`` so far, after each iteration.
+    fun : numpy.ndarray
+        The best value seen so far (inf before any finite value).
+    sigma : numpy.ndarray
+        The search distribution's overall spread after the iteration (NaN where the run has
+        none, as in the paper's loop of ``'polished'``).
+    dropped : int
+        The iterations before these, no longer kept.
+    """
+
+    __slots__ = ("nfev", "fun", "sigma", "dropped")
+
+    def __init__(
+        self,
+        nfev: npt.NDArray[np.uint64],
+        fun: _FloatArray,
+        sigma: _FloatArray,
+        dropped: int = 0,
+    ) -> None:
+        self.nfev = nfev
+        self.fun = fun
+        self.sigma = sigma
+        self.dropped = dropped
+
+    def __len__(self) -> int:
+        return len(self.nfev)
+
+    def __repr__(self) -> str:
+        dropped = f", {self.dropped} earlier dropped" if self.dropped else ""
+        return f"SearchHistory({len(self)} iterations{dropped})"
+
+
 # How a run ended -> (success, status): scipy's meaning (0 success, 1 a limit reached, 99 the
 # callback).
 _ENDINGS = {
     "target reached": (True, 0),
     "converged": (True, 0),
     "stalled": (True, 0),
+    "done": (True, 0),
     "budget spent": (False, 1),
     "iterations done": (False, 1),
+    "interrupted": (False, 2),
+    "raised": (False, 3),
     "callback": (False, 99),
 }
 
@@ -193,6 +248,39 @@ def _adaptive_result(
         sigma=raw["sigma"],
         history=None,
     )
+
+
+def _stopped_result(
+    raw: dict[str, Any],
+    method: str,
+    stop: str,
+    callback_stop: Optional[str],
+    error: Optional[BaseException],
+    final_value: Optional[float],
+) -> OptimizeResult:
+    """The result of a run stopped before its end: by the callback, Ctrl-C
+    (``'interrupted'``) or an exception (``'raised'``, ``error``). The adaptive search's best
+    point so far; the paper loop's last iterate (with ``final_value``, ``fun`` at it, when the
+    callback stopped it)."""
+    if method == "plateau":
+        result = _paper_result(raw, final_value)
+        where = "x is the last iterate"
+    else:
+        result = OptimizeResult(
+            x=raw["x"], fun=float(raw["fun"]), nit=int(raw["nit"]), nfev=int(raw["nfev"]),
+            restarts=None, sigma=None, history=None,
+        )  # fmt: skip
+        where = "x is the best point seen"
+    nit, nfev = int(result["nit"]), int(result["nfev"])
+    if stop == "callback":
+        message = _callback_message(callback_stop, nit)
+    elif stop == "interrupted":
+        message = f"interrupted (KeyboardInterrupt) after {nfev} evaluations; {where}"
+    else:
+        message = f"ended by {error!r} after {nfev} evaluations; {where}"
+    success, status = _ENDINGS[stop]
+    result.update(success=success, status=status, message=message)
+    return result
 
 
 def _paper_result(

@@ -37,7 +37,7 @@ import numpy.typing as npt
 
 from ._adapter import _Smoothing
 from ._native import OptionTypeError
-from ._options import _show
+from ._checks import _show
 from ._types import _SamplingName
 
 

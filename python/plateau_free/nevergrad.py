@@ -24,8 +24,11 @@ How nevergrad's ask and tell map to ours: the search runs in nevergrad's standar
 1). nevergrad asks for one candidate at a time; our run hands out a batch of points (a
 generation, or an estimate's perturbed points), which are queued and handed out one by one;
 when every point of the batch has been told, the batch's values go to our ``tell`` in the
-batch's order, whatever order nevergrad told them in. The optimizer is sequential
-(``no_parallelization``): the next batch depends on the whole previous one. The budget is
+batch's order, whatever order nevergrad told them in, so that a run with ``num_workers > 1``
+(nevergrad's parallel evaluation) is the run of one worker. The next batch depends on the
+whole previous one: while a batch's last points are out, further asks (from idle workers) get
+the best point so far, whose values are not ours to use. With ``num_workers=1``, asking past a
+batch before telling it is an error. The budget is
 nevergrad's (required); our run spends at most it, and if it ends before nevergrad stops
 asking, the remaining asks are its best point. Our run's seed is drawn from the
 parametrization's random state, so ``parametrization.random_state = np.random.RandomState(s)``
@@ -54,7 +57,7 @@ _INDEX = "plateau_free_index"
 class _PlateauFreeOptimizer(base.Optimizer):  # type: ignore[misc]
     """A nevergrad optimizer running :func:`plateau_free.ask_tell` (see the module)."""
 
-    no_parallelization = True
+    no_parallelization = False
 
     def __init__(
         self,
@@ -95,8 +98,11 @@ class _PlateauFreeOptimizer(base.Optimizer):  # type: ignore[misc]
         run = self._start()
         if not self._queue:
             if any(v is None for v in self._values):
+                if self.num_workers > 1:
+                    return self._candidate(self._best(), None)  # an idle worker's filler
                 raise RuntimeError(
-                    "PlateauFree is sequential: tell every asked candidate before asking more"
+                    "PlateauFree is sequential with num_workers=1: tell every asked candidate "
+                    "before asking more"
                 )
             if run.done:
                 return self._candidate(self._best(), None)

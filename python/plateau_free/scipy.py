@@ -23,12 +23,12 @@ scipy is imported when ``method`` is first called: ``import plateau_free.scipy``
 from __future__ import annotations
 
 import importlib
-import inspect
 import warnings
 from typing import Any, Callable, Optional, Sequence
 
 from ._minimize import minimize
-from ._options import _show
+from ._options import _OPTIONS as _MINIMIZE_OPTIONS
+from ._checks import _show
 
 
 def method(
@@ -73,14 +73,14 @@ def method(
                 f"{name} = {_show(options[name])}: not an option of plateau_free.scipy.method "
                 f"(it takes maxfev and {', '.join(sorted(_OPTIONS))})"
             )
-    extra = tuple(args)
-    objective = fun if not extra else (lambda x: fun(x, *extra))
-    result = minimize(objective, x0, budget=maxfev, bounds=bounds, callback=callback, **options)
+    if tuple(args):
+        options["args"] = tuple(args)
+    result = minimize(fun, x0, budget=maxfev, bounds=bounds, callback=callback, **options)
     return optimize.OptimizeResult(dict(result))
 
 
 # minimize's own options, but those that scipy.optimize.minimize gives by keyword.
-_OPTIONS = frozenset(inspect.signature(minimize).parameters) - {"fun", "x0", "budget", "bounds", "callback"}
+_OPTIONS = frozenset(_MINIMIZE_OPTIONS) - {"budget", "bounds", "callback", "args"} | {"method"}
 
 
 def _import_scipy_optimize() -> Any:

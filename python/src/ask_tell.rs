@@ -66,13 +66,17 @@ impl Paper {
                     got: values.len(),
                 }));
             }
-            // As `plateau_free.minimize`'s final evaluation: a NaN or an infinity is refused.
+            // `result.fun` is this value: a NaN or an infinity is refused under every
+            // failure policy (there is no other point to rank it against).
             if !values[0].is_finite() {
-                return Err(value_error(Error::NonFiniteValue {
+                let error = Error::NonFiniteValue {
                     sample: self.run.history().evaluations,
                     value: values[0],
                     point: self.run.theta().to_vec(),
-                }));
+                };
+                return Err(PyValueError::new_err(format!(
+                    "{error}: tell finite values (the final evaluation must be finite)"
+                )));
             }
             self.final_value = Some(values[0]);
             self.final_asked = false;
@@ -164,7 +168,7 @@ impl PyAskTell {
 
     /// The paper's loop (`plateau_free.minimize(method='plateau')`) from `x0`.
     #[staticmethod]
-    #[pyo3(signature = (x0, adam, annealer, iterations, samples=2, sampling="radial", antithetic=true, orthogonal=false, seed=0, record_x=false, final_evaluation=true, keep_history=None))]
+    #[pyo3(signature = (x0, adam, annealer, iterations, samples=2, sampling="radial", antithetic=true, orthogonal=false, seed=0, record_x=false, final_evaluation=true, keep_history=None, on_failure="raise"))]
     #[allow(clippy::too_many_arguments)]
     fn paper(
         py: Python<'_>,
@@ -180,6 +184,7 @@ impl PyAskTell {
         record_x: bool,
         final_evaluation: bool,
         keep_history: Option<usize>,
+        on_failure: &str,
     ) -> PyResult<Self> {
         let keep = keep_history.unwrap_or(HistoryKeep::DEFAULT_LAST);
         let (theta, shape) = to_vector(py, x0, "x0")?;
@@ -188,7 +193,8 @@ impl PyAskTell {
             .sampling(parse_sampling(sampling)?)
             .antithetic(antithetic)
             .orthogonal(orthogonal)
-            .seed(seed);
+            .seed(seed)
+            .on_failure(estimate_on_failure(on_failure)?);
         let optimizer = Optimizer::new(adam.inner.lock(py)?.clone(), annealer.inner)
             .record_theta(false)
             // The records are `Record`'s (of `keep` iterations): the library's own history
@@ -251,6 +257,13 @@ impl PyAskTell {
         })
     }
 
+    /// Whether the asked point is the paper loop's final evaluation (its value is
+    /// `result.fun`, and must be finite).
+    #[getter]
+    fn final_asked(&self, py: Python<'_>) -> PyResult<bool> {
+        Ok(matches!(&*self.run.lock(py)?, Run::Paper(p) if p.final_asked))
+    }
+
     /// Evaluations told so far.
     #[getter]
     fn nfev(&self, py: Python<'_>) -> PyResult<usize> {
@@ -271,6 +284,48 @@ impl PyAskTell {
         }
     }
 
+    /// The adaptive search's overall spread now (NaN for the paper's loop).
+    fn sigma(&self, py: Python<'_>) -> PyResult<f64> {
+        Ok(match &*self.run.lock(py)? {
+            Run::Adaptive(run) => run.sigma(),
+            Run::Paper(_) => f64::NAN,
+        })
+    }
+
+    /// The paper loop's last iteration: `(iterations done, x, sigma, mean value, gradient,
+    /// evaluations)`; None before the first and for the adaptive search.
+    #[allow(clippy::type_complexity)]
+    fn last_step<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Option<(usize, Bound<'py, PyAny>, f64, f64, Bound<'py, PyAny>, usize)>> {
+        let run = self.run.lock(py)?;
+        let Run::Paper(p) = &*run else {
+            return Ok(None);
+        };
+        let (Some(&sigma), Some(estimate)) = (p.run.history().sigma.last(), p.run.last_estimate())
+        else {
+            return Ok(None);
+        };
+        Ok(Some((
+            p.run.iteration(),
+            array_like(py, p.run.theta().to_vec(), &self.shape)?,
+            sigma,
+            estimate.mean_value,
+            array_like(py, estimate.gradient.clone(), &self.shape)?,
+            p.run.history().evaluations,
+        )))
+    }
+
+    /// The paper loop's raw results so far, as [`PyAskTell::result`] gives them at the end
+    /// (the run need not have ended); None for the adaptive search.
+    fn partial<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        match &*self.run.lock(py)? {
+            Run::Paper(p) => Ok(Some(paper_dict(py, p, &self.shape)?)),
+            Run::Adaptive(_) => Ok(None),
+        }
+    }
+
     /// The raw results of the ended run (the dict that `_minimize_adaptive` or `_minimize`
     /// returns, plus the paper loop's final value), or None before the end.
     fn result<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
@@ -286,15 +341,40 @@ impl PyAskTell {
                 if !p.is_done() {
                     return Ok(None);
                 }
-                out.set_item("x", array_like(py, p.run.theta().to_vec(), &self.shape)?)?;
-                out.set_item("nit", p.run.iteration())?;
-                out.set_item("nfev", p.run.history().evaluations)?;
-                out.set_item("final_value", p.final_value)?;
-                let mut record = p.record.clone();
-                record.trim(p.keep);
-                record.into_dict(py, &out, &self.shape, p.record_x)?;
+                return Ok(Some(paper_dict(py, p, &self.shape)?));
             }
         }
         Ok(Some(out))
     }
 }
+
+/// The paper loop's raw results: `x`, `nit`, `nfev`, the final value and the records.
+fn paper_dict<'py>(py: Python<'py>, p: &Paper, shape: &[usize]) -> PyResult<Bound<'py, PyDict>> {
+    let out = PyDict::new(py);
+    out.set_item("x", array_like(py, p.run.theta().to_vec(), shape)?)?;
+    out.set_item("nit", p.run.iteration())?;
+    out.set_item("nfev", p.run.history().evaluations)?;
+    out.set_item("final_value", p.final_value)?;
+    let mut record = p.record.clone();
+    record.trim(p.keep);
+    record.into_dict(py, &out, shape, p.record_x)?;
+    Ok(out)
+}
+
+/// `on_failure` for the paper loop's estimator: `'continue'` redraws an estimate with a
+/// failed point (up to [`FAILURE_REDRAWS`] times), `'raise'` ends the run.
+fn estimate_on_failure(policy: &str) -> PyResult<plateau_free::OnFailure> {
+    match policy {
+        "continue" => Ok(plateau_free::OnFailure::Resample {
+            limit: FAILURE_REDRAWS,
+        }),
+        "raise" => Ok(plateau_free::OnFailure::Fail),
+        _ => Err(PyValueError::new_err(format!(
+            "on_failure = '{policy}' is not a policy: use 'continue' or 'raise'"
+        ))),
+    }
+}
+
+/// The redraws of one estimate that the paper's loop makes under `on_failure='continue'`:
+/// as many as `method='polished'`'s loop makes.
+const FAILURE_REDRAWS: usize = 10;

@@ -235,6 +235,8 @@ pub(crate) struct AdaptiveOptions {
     budget: Option<usize>,
     seed: u64,
     sigma0: Option<f64>,
+    /// One spread per coordinate: `Minimizer::sigma0_each`.
+    sigma0_each: Option<Vec<f64>>,
     bounds: Option<Bounds>,
     target: Option<f64>,
     population: Option<usize>,
@@ -246,14 +248,28 @@ pub(crate) struct AdaptiveOptions {
     polish: Option<f64>,
     /// `Minimizer::stop_when_stalled`'s window, a fraction of the budget; None: off.
     stall: Option<f64>,
+    /// `'continue'` or `'raise'`: `Minimizer::on_failure`.
+    on_failure: String,
+    /// `Minimizer::patience`: converged restarts back at the best point that end the run.
+    patience: Option<usize>,
 }
 
 impl AdaptiveOptions {
     /// `minimizer` with these options; those given as None keep the Minimizer's defaults.
     pub(crate) fn apply<F>(self, minimizer: RsMinimizer<F>) -> RsMinimizer<F> {
-        let minimizer = minimizer.seed(self.seed).restarts(self.restarts);
+        let policy = if self.on_failure == "raise" {
+            FailurePolicy::Raise
+        } else {
+            FailurePolicy::Continue
+        };
+        let minimizer = minimizer
+            .seed(self.seed)
+            .restarts(self.restarts)
+            .on_failure(policy);
         let minimizer = maybe(minimizer, self.budget, RsMinimizer::budget);
         let minimizer = maybe(minimizer, self.sigma0, RsMinimizer::sigma0);
+        let minimizer = maybe(minimizer, self.sigma0_each, RsMinimizer::sigma0_each);
+        let minimizer = maybe(minimizer, self.patience, RsMinimizer::patience);
         let minimizer = maybe(minimizer, self.bounds, |m, (lower, upper)| {
             m.bounds(lower, upper)
         });

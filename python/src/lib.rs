@@ -2,13 +2,16 @@
 //! `minimize`, `Sampling` and the result types) by the Python package `plateau_free`
 //! (`python/plateau_free/__init__.py`, the code in `python/plateau_free/_minimize.py` and beside it).
 //!
-//! How a Python objective runs: every estimate, and every run of `plateau_free::Minimizer`
-//! (`plateau_free.minimize(fun, x0, budget=...)`), is computed with the GIL released
-//! ([`Python::detach`]); each call of `fun` re-attaches, checks for pending signals (so Ctrl-C
-//! stops a run within one call of `fun`), builds one numpy array for the point (or one
-//! `(N, n)` array for a whole batch, copied in a single `memcpy`), calls `fun` and reads the
-//! value. The first exception raised by `fun` is kept and the remaining evaluations of the
-//! estimate are skipped; it is then raised unchanged (type, message, traceback).
+//! How a Python objective runs. `plateau_free.minimize`'s adaptive, polished and paper runs are
+//! the library's ask-and-tell state machines (`_AskTell`), asked and told by the Python driver
+//! (`python/plateau_free/_drive.py`), which evaluates the points where `workers` says and owns
+//! failures, Ctrl-C, progress and checkpoints. The estimators and the baselines' loop
+//! (`_minimize`) compute with the GIL released ([`Python::detach`]); each call of `fun`
+//! re-attaches, checks for pending signals (so Ctrl-C stops a run within one call of `fun`),
+//! builds one numpy array for the point (or one `(N, n)` array for a whole batch, copied in a
+//! single `memcpy`), calls `fun` and reads the value. The first exception raised by `fun` is
+//! kept and the remaining evaluations of the estimate are skipped; it is then raised unchanged
+//! (type, message, traceback).
 //!
 //! Threads: every pyclass with state (the estimators, `Adam`, `_AskTell`) is `frozen` and keeps
 //! that state behind a mutex, taken with the GIL released ([`locking::Guarded`]): calls on one
@@ -24,11 +27,11 @@ use numpy::{
 };
 use plateau_free::baseline::{FiniteDifference as RsFiniteDifference, Spsa as RsSpsa};
 use plateau_free::{
-    Adam as RsAdam, Annealer as RsAnnealer, Error, GradientEstimator, HistoryKeep,
+    Adam as RsAdam, Annealer as RsAnnealer, Error, FailurePolicy, GradientEstimator, HistoryKeep,
     Minimizer as RsMinimizer, Minimum as RsMinimum, Objective, Optimizer,
     PlateauFreeGradient as RsPlateauFreeGradient, Points, Sampling, Schedule, Stop, Strategy,
 };
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyFloat, PyInt, PyString, PyTuple, PyType};
 
@@ -54,6 +57,20 @@ use paper_loop::*;
 use reference::*;
 use schedule::*;
 
+/// Replaces the file `path` by `data` atomically (the library's `replace_file`: a temporary
+/// file beside it, fsync, rename); on error the file is as before. `plateau_free.minimize`'s
+/// checkpoint files are written with it.
+#[pyfunction]
+fn _replace_file(py: Python<'_>, path: std::path::PathBuf, data: Vec<u8>) -> PyResult<()> {
+    py.detach(|| plateau_free::lifecycle::replace_file(&path, &data))
+        .map_err(|e| {
+            pyo3::exceptions::PyOSError::new_err(format!(
+                "checkpoint {} not written: {e}",
+                path.display()
+            ))
+        })
+}
+
 /// The Rust extension of the Python package `plateau-free`; use `import plateau_free`.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -73,12 +90,21 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyLeastSquares>()?;
     m.add_function(wrap_pyfunction!(_minimize, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_reference_estimates, m)?)?;
-    m.add_function(wrap_pyfunction!(_minimize_adaptive, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_reference_minimize, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_reference_minimize_adaptive, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_seconds_per_evaluation, m)?)?;
     m.add("PAPER_SIGMA_MIN", plateau_free::PAPER_SIGMA_MIN)?;
     m.add("PAPER_WARMUP", plateau_free::PAPER_WARMUP)?;
     m.add("STALL_WINDOW", plateau_free::STALL_WINDOW)?;
+    m.add("DEFAULT_POLISH", plateau_free::DEFAULT_POLISH)?;
+    m.add(
+        "CHECKPOINT_SECONDS",
+        plateau_free::lifecycle::CHECKPOINT_SECONDS,
+    )?;
+    m.add(
+        "PROGRESS_SECONDS",
+        plateau_free::lifecycle::PROGRESS_SECONDS,
+    )?;
+    m.add_function(wrap_pyfunction!(_replace_file, m)?)?;
     Ok(())
 }

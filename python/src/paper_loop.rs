@@ -1,4 +1,7 @@
-//! The paper's loop (`Optimizer`): `plateau_free.minimize(..., method="plateau")`.
+//! The paper's loop in its callback form (`Optimizer`), with any estimator: what
+//! `plateau_free.minimize(..., method="fd")` and `"spsa"` run (the baselines have no ask-and-tell
+//! form); and [`Record`], the per-iteration records of the paper's loop that
+//! `plateau_free.minimize` returns as `history`, kept by this loop and by `_AskTell`.
 
 use super::*;
 
@@ -12,6 +15,9 @@ pub(crate) struct Record {
     pub(crate) nfev: Vec<u64>,
     pub(crate) x: Vec<f64>,
     pub(crate) stopped_by_callback: bool,
+    /// Whether Ctrl-C (a `KeyboardInterrupt`) ended the run.
+    #[serde(default)]
+    pub(crate) interrupted: bool,
     /// The oldest iterations no longer held (a file without it has dropped none).
     #[serde(default)]
     pub(crate) dropped: usize,
@@ -83,6 +89,7 @@ impl Record {
     ) -> PyResult<()> {
         let held = self.sigma.len();
         out.set_item("stopped_by_callback", self.stopped_by_callback)?;
+        out.set_item("interrupted", self.interrupted)?;
         out.set_item("dropped", self.dropped)?;
         out.set_item("sigma", self.sigma.into_pyarray(py))?;
         out.set_item("grad_norm", self.grad_norm.into_pyarray(py))?;
@@ -99,9 +106,6 @@ impl Record {
 
 /// The version of the checkpoint file's layout.
 const CHECKPOINT_FORMAT: u32 = 1;
-
-/// About every this many seconds a run with a checkpoint file writes it (by default).
-const CHECKPOINT_SECONDS: f64 = 30.0;
 
 /// The contents of a `minimize(..., checkpoint=path)` file.
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -121,7 +125,8 @@ struct CheckpointFile {
 /// Where a run keeps its checkpoint, how often, and with which settings.
 pub(crate) struct Checkpointing {
     path: std::path::PathBuf,
-    /// Every this many iterations; `None`: about every [`CHECKPOINT_SECONDS`]; `Some(0)`:
+    /// Every this many iterations; `None`: about every
+    /// [`plateau_free::lifecycle::CHECKPOINT_SECONDS`], the library's cadence; `Some(0)`:
     /// only at the end and when the run stops on an exception.
     every: Option<usize>,
     settings: serde_json::Value,
@@ -192,8 +197,7 @@ impl Checkpointing {
         Ok(Some((file.state, file.record)))
     }
 
-    /// Writes the file atomically: a temporary file in the same directory, fsync, rename,
-    /// fsync of the directory.
+    /// Writes the file atomically, with the library's `replace_file`.
     fn save(&self, state: &plateau_free::OptimizerState, record: &Record) -> PyResult<()> {
         let file = CheckpointFile {
             format: CHECKPOINT_FORMAT,
@@ -203,42 +207,13 @@ impl Checkpointing {
             record: record.clone(),
         };
         let bytes = serde_json::to_vec(&file).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        replace_file(&self.path, &bytes).map_err(|e| {
+        plateau_free::lifecycle::replace_file(&self.path, &bytes).map_err(|e| {
             pyo3::exceptions::PyOSError::new_err(format!(
                 "checkpoint {} not written: {e}",
                 self.path.display()
             ))
         })
     }
-}
-
-/// Replaces `path` by `bytes` atomically; on error `path` is as before and no temporary
-/// file is left.
-fn replace_file(path: &std::path::Path, bytes: &[u8]) -> std::io::Result<()> {
-    use std::io::Write;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => std::path::Path::new("."),
-    };
-    let name = path
-        .file_name()
-        .map_or_else(|| "checkpoint".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
-    let result = (|| {
-        let mut file = std::fs::File::create(&tmp)?;
-        file.write_all(bytes)?;
-        file.sync_all()?;
-        drop(file);
-        std::fs::rename(&tmp, path)?;
-        if let Ok(d) = std::fs::File::open(dir) {
-            let _ = d.sync_all();
-        }
-        Ok(())
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -264,8 +239,9 @@ pub(crate) fn run<G: GradientEstimator + Send + ?Sized>(
     let restored = loaded.as_ref().map_or(0, |(state, _)| state.iteration);
     let (mut state, mut record) = match loaded {
         Some((state, mut record)) => {
-            // A run the callback stopped goes on when called again.
+            // A run the callback or Ctrl-C stopped goes on when called again.
             record.stopped_by_callback = false;
+            record.interrupted = false;
             (state, record)
         }
         None => (
@@ -291,7 +267,7 @@ pub(crate) fn run<G: GradientEstimator + Send + ?Sized>(
                 let k = if ran == 0 || per <= 0.0 {
                     1
                 } else {
-                    ((CHECKPOINT_SECONDS / per) as usize).max(1)
+                    ((plateau_free::lifecycle::CHECKPOINT_SECONDS / per) as usize).max(1)
                 };
                 Some(done + k)
             }
@@ -359,17 +335,26 @@ pub(crate) fn run<G: GradientEstimator + Send + ?Sized>(
                 let state = *run_error.state;
                 record.truncate(state.iteration, dim);
                 save(&state, &record)?;
-                return match shared.finish(Err::<(), _>(run_error.error)) {
-                    Err(e) => Err(e),
-                    Ok(()) => Err(PyValueError::new_err("the run failed")),
+                let err = match shared.finish(Err::<(), _>(run_error.error)) {
+                    Err(e) => e,
+                    Ok(()) => PyValueError::new_err("the run failed"),
                 };
+                if !err.is_instance_of::<PyKeyboardInterrupt>(py) {
+                    return Err(err);
+                }
+                // Ctrl-C: the run ends with the last completed iteration.
+                record.interrupted = true;
+                state
             }
         };
         if let Some(err) = callback_error {
             save(&state, &record)?;
-            return Err(err);
+            if !err.is_instance_of::<PyKeyboardInterrupt>(py) {
+                return Err(err);
+            }
+            record.interrupted = true;
         }
-        if checkpoint_due && !record.stopped_by_callback {
+        if checkpoint_due && !record.stopped_by_callback && !record.interrupted {
             save(&state, &record)?;
             continue;
         }
@@ -395,11 +380,13 @@ pub(crate) fn run<G: GradientEstimator + Send + ?Sized>(
     ))
 }
 
-/// The optimisation loop behind `plateau_free.minimize`: `iterations` Adam steps along the
-/// estimator's gradient with the annealer's sigma. `callback(iteration, x, sigma, value,
-/// gradient, nfev)` runs after every iteration; a truthy return stops the run. Returns a dict
-/// of raw results that `plateau_free.minimize` turns into an `OptimizeResult` (`restored`: the
-/// iterations read from the checkpoint file, 0 for a fresh run).
+/// The optimisation loop behind `plateau_free.minimize(method='fd' | 'spsa')`: `iterations`
+/// Adam steps along the estimator's gradient with the annealer's sigma. `callback(iteration,
+/// x, sigma, value, gradient, nfev)` runs after every iteration; a truthy return stops the run.
+/// Ctrl-C (a `KeyboardInterrupt` from `fun`, the callback or the signal check) ends it after the
+/// last completed iteration (`interrupted` in the raw results). Returns a dict of raw results
+/// that `plateau_free.minimize` turns into an `OptimizeResult` (`restored`: the iterations read
+/// from the checkpoint file, 0 for a fresh run).
 #[pyfunction]
 #[pyo3(signature = (estimator, x0, adam, annealer, iterations=None, callback=None, record_x=false, checkpoint=None, checkpoint_every=None, settings=None, keep_history=None))]
 #[allow(clippy::too_many_arguments)]

@@ -30,15 +30,20 @@ def same(result, rust):
 
 def test_staircase_solved_with_defaults():
     assert staircase(X0) == 14.0
-    result = plateau_free.minimize(staircase, X0, budget=2000)
+    result = plateau_free.minimize(staircase, X0, budget=2000, patience=0)
     assert result.fun == 0.0
     assert np.array_equal(np.floor(result.x + 0.5), [1.0, -2.0, 3.0])
     assert staircase(result.x) == 0.0
     assert result.nfev <= 2000
-    # The budget ran out: scipy's "maximum number of evaluations", not a success.
+    # Without the done rule the budget runs out: scipy's "maximum number of evaluations", not
+    # a success.
     assert not result.success and result.status == 1
     assert result.message == "budget spent: 2000 of at most 2000 evaluations; x is the best point seen"
-    assert result.history is None
+    assert isinstance(result.history, plateau_free.SearchHistory)
+    assert result.history.nfev[-1] == result.nfev and result.history.fun[-1] == 0.0
+    # With it (the default), the run is done well before its budget.
+    done = plateau_free.minimize(staircase, X0, budget=2000)
+    assert done.fun == 0.0 and done.success and done.status == 0 and done.nfev < 2000
     assert isinstance(result.restarts, int) and result.sigma > 0.0
     assert result.x.shape == (3,)
 
@@ -159,8 +164,8 @@ def test_bad_bounds():
         plateau_free.minimize(staircase, X0, budget=100, bounds=[(-1, 1), (2, 1), (-1, 1)])
     with pytest.raises(ValueError, match=r"x0\[0\] = 0\.0 is outside bounds\[0\] = \(1, 2\)"):
         plateau_free.minimize(staircase, X0, budget=100, bounds=[(1, 2)] * 3)
-    with pytest.raises(ValueError, match=r"bounds\[0\] = \(None, 1\): method='adaptive' needs finite bounds"):
-        plateau_free.minimize(staircase, X0, budget=100, bounds=[(None, 1)] * 3)
+    with pytest.raises(ValueError, match=r"bounds\[0\] = \(None, 1, 2\) must be a \(lower, upper\) pair"):
+        plateau_free.minimize(staircase, X0, budget=100, bounds=[(None, 1, 2)] * 3)
 
 
 def test_bad_options():
@@ -176,11 +181,12 @@ def test_bad_options():
         plateau_free.minimize(staircase, X0, budget=100, lr=0.1, samples=4, method="adaptive")
 
 
-def test_non_finite_value_is_a_value_error():
+def test_non_finite_value_is_a_value_error_under_raise():
     with pytest.raises(ValueError, match="f returned NaN at evaluation 0"):
-        plateau_free.minimize(lambda x: math.nan, X0, budget=100)
-    with pytest.raises(ValueError, match="f returned inf"):
-        plateau_free.minimize(lambda x: math.inf if x[0] > 0.1 else 1.0, X0, budget=100)
+        plateau_free.minimize(lambda x: math.nan, X0, budget=100, on_failure="raise")
+    with pytest.raises(ValueError, match="f returned inf") as info:
+        plateau_free.minimize(lambda x: math.inf if x[0] > 0.1 else 1.0, X0, budget=100, on_failure="raise")
+    assert info.value.result.fun == 1.0  # the best point so far comes with the error
 
 
 class Boom(Exception):
@@ -198,13 +204,15 @@ def test_exception_from_fun_propagates_unchanged():
         return staircase(x)
 
     with pytest.raises(Boom) as info:
-        plateau_free.minimize(fun, X0, budget=1000)
+        plateau_free.minimize(fun, X0, budget=1000, on_failure="raise")
     assert info.value is err
     assert len(calls) == 7  # nothing evaluated after the exception
+    assert info.value.result.nfev == 1 and info.value.result.status == 3  # the start, told
 
     def batch(xs):
         raise err
 
+    # Every evaluation raised: the run has nothing to go on with, and raises the first.
     with pytest.raises(Boom) as info:
         plateau_free.minimize(batch, X0, budget=1000, batched=True)
     assert info.value is err
@@ -225,10 +233,12 @@ def test_non_number_is_a_type_error():
 
 def test_keyboard_interrupt_stops_the_adaptive_run_within_one_call():
     fun, count = interrupting(staircase)
-    with pytest.raises(KeyboardInterrupt):
-        plateau_free.minimize(fun, X0, budget=10**6)
+    result = plateau_free.minimize(fun, X0, budget=10**6)
     assert count[0] <= 6
+    assert result.status == 2 and not result.success and result.message.startswith("interrupted")
+    assert result.fun == min(staircase(X0), result.fun) and result.nfev < count[0]
 
-    # `sum` runs no bytecode: only the check before each call of fun sees the signal.
-    with interrupted_within(5.0):
-        plateau_free.minimize(sum, [0.5, 0.5], budget=10**9, bounds=(-1.0, 1.0))  # finite points
+    # `sum` runs no bytecode: the driver sees the signal between calls.
+    with interrupted_within(5.0) as run:
+        run.result = plateau_free.minimize(sum, [0.5, 0.5], budget=10**9, bounds=(-1.0, 1.0), patience=0)
+    assert run.result.status == 2

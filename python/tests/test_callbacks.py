@@ -103,8 +103,11 @@ def test_success_and_status_follow_scipy():
     spent = plateau_free.minimize(lambda x: float(np.sum(x**2)), np.full(5, 3.0), budget=60)
     assert not spent.success and spent.status == 1
     assert spent.message == "budget spent: 60 of at most 60 evaluations; x is the best point seen"
-    default = plateau_free.minimize(lambda x: float(np.sum(np.abs(x))) + 1.0, [3.0])
+    default = plateau_free.minimize(lambda x: float(np.sum(np.abs(x))) + 1.0, [3.0], patience=0)
     assert not default.success and default.status == 1 and "of at most 1000 evaluations" in default.message
+    # The default: restarts that converge back at the best point end the run, a success.
+    done = plateau_free.minimize(lambda x: float(np.sum(np.abs(x))) + 1.0, [3.0])
+    assert done.success and done.status == 0 and done.message.startswith("done") and done.nfev < 1000
     target = plateau_free.minimize(staircase, X0, budget=5000, target=0.0)
     assert target.success and target.status == 0 and target.message == "target reached"
     converged = plateau_free.minimize(lambda x: float(x @ x), [1.0, 1.0], budget=10**5, restarts=False)

@@ -173,9 +173,10 @@ def test_exception_from_fun_comes_out_of_minimize_unchanged():
         return float(x[0])
 
     with pytest.raises(Boom, match="seventh") as info:
-        plateau_free.minimize(fails_later, [0.0], method="plateau", iterations=100)
+        plateau_free.minimize(fails_later, [0.0], method="plateau", iterations=100, on_failure="raise")
     assert count[0] == 7
     assert any(entry.name == "fails_later" for entry in info.traceback)
+    assert info.value.result.nit == 3 and info.value.result.status == 3  # the result so far
 
 
 def test_exception_from_callback_comes_out_unchanged():
@@ -188,15 +189,20 @@ def test_exception_from_callback_comes_out_unchanged():
 
 def test_keyboard_interrupt_stops_minimize_within_one_call():
     fun, count = interrupting(linear)
-    with pytest.raises(KeyboardInterrupt):
-        plateau_free.minimize(fun, [0.0], method="plateau", iterations=10_000)
+    result = plateau_free.minimize(fun, [0.0], method="plateau", iterations=10_000)
     assert count[0] <= 6
+    assert result.status == 2 and result.message.startswith("interrupted")
+    for method in ("fd", "spsa"):  # the baselines too
+        fun, count = interrupting(linear)
+        result = plateau_free.minimize(fun, [0.0], method=method, iterations=10_000)
+        assert count[0] <= 6 and result.status == 2, method
 
 
 def test_keyboard_interrupt_reaches_a_fun_without_python_bytecode():
-    # `sum` runs no bytecode: only the check between evaluations sees the signal.
-    with interrupted_within(5.0):
-        plateau_free.minimize(sum, [0.0, 0.0], method="plateau", iterations=10**9)
+    # `sum` runs no bytecode: the check between evaluations sees the signal.
+    with interrupted_within(5.0) as run:
+        run.result = plateau_free.minimize(sum, [0.0, 0.0], method="plateau", iterations=10**9)
+    assert run.result.status == 2
 
 
 @pytest.mark.parametrize("bad", [float("nan"), float("inf"), -float("inf")])

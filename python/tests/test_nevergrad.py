@@ -7,6 +7,7 @@ these tests fail, never skip, when it is missing.
 
 from __future__ import annotations
 
+import concurrent.futures
 import nevergrad as ng
 import numpy as np
 import pytest
@@ -109,8 +110,6 @@ def test_bad_use_is_an_error_naming_it() -> None:
         pfng.ParametrizedPlateauFree(seed=3)
     with pytest.raises(ValueError, match="budget"):
         ng.optimizers.registry["PlateauFree"](parametrization=2, budget=None)
-    with pytest.raises(ValueError, match="parallel"):
-        ng.optimizers.registry["PlateauFree"](parametrization=2, budget=10, num_workers=2)
     opt = ng.optimizers.registry["PlateauFree"](parametrization=2, budget=100)
     opt.ask()  # hands out the first point of a batch, queues the rest
     for _ in range(len(opt._queue)):
@@ -127,3 +126,18 @@ def test_dimension_one_and_a_configured_variant() -> None:
     opt = small(parametrization=ng.p.Array(shape=(20,)), budget=300)
     value = opt.minimize(f).value
     assert value.shape == (20,) and f(value) < f(np.zeros(20)) + 1e-12
+
+
+def test_several_workers_are_accepted() -> None:
+    # nevergrad keeps 4 candidates in flight: a batch's values still go to the run in order.
+    f = corefuncs.registry["sphere"]
+    param = ng.p.Array(shape=(3,))
+    param.random_state = np.random.RandomState(5)
+    opt = ng.optimizers.registry["PlateauFree"](parametrization=param, budget=600, num_workers=4)
+    assert f(opt.minimize(f).value) < 1e-3
+    with concurrent.futures.ThreadPoolExecutor(4) as pool:
+        param = ng.p.Array(shape=(3,))
+        param.random_state = np.random.RandomState(5)
+        opt = ng.optimizers.registry["PlateauFree"](parametrization=param, budget=600, num_workers=4)
+        value = opt.minimize(f, executor=pool).value
+    assert f(value) < 1e-2

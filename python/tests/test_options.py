@@ -23,10 +23,10 @@ def test_minimize_with_nothing_else_runs_the_adaptive_search_at_its_default_budg
         return staircase(x)
 
     result = plateau_free.minimize(counted, np.zeros(50))
-    assert "restarts" in result and result.history is None  # the adaptive search's result
+    assert "restarts" in result and isinstance(result.history, plateau_free.SearchHistory)
     assert calls[0] == result.nfev <= 1000 * 50
     assert result.fun == 0.0
-    assert result.message.startswith("target reached") or "of at most 50000 evaluations" in result.message
+    assert result.message.startswith(("target reached", "done")) or "of at most 50000 evaluations" in result.message
     assert plateau_free.ask_tell(X0).method == "adaptive"
     assert plateau_free.minimize(staircase, X0, method=None).nfev == plateau_free.minimize(staircase, X0).nfev
 
@@ -37,20 +37,22 @@ VALUES = dict(
     restarts=False, polish=0.2, iterations=10, lr=0.1, samples=4, sampling="gaussian",
     antithetic=False, annealer="cosine", sigma_min=0.05, step=0.01, orthogonal=True,
     parallel=True, record_x=True, final_evaluation=False, checkpoint="never-written.json",
-    checkpoint_every=3, keep_history=5, stop_when_stalled=0.2,
+    checkpoint_every=3, keep_history=5, stop_when_stalled=0.2, workers=2, disp=False,
+    patience=2, args=(1,), on_failure="raise",
 )  # fmt: skip
+# Options that every method takes.
+EVERY = {"budget", "bounds", "callback", "checkpoint", "checkpoint_every", "keep_history", "args"}
 TAKES = {
-    "adaptive": {"budget", "sigma0", "bounds", "callback", "target", "population", "restarts",
-                 "stop_when_stalled"},
-    "polished": {"budget", "sigma0", "bounds", "callback", "target", "population", "restarts",
-                 "polish", "lr", "samples", "stop_when_stalled"},
-    "plateau": {"budget", "sigma0", "bounds", "callback", "iterations", "lr", "samples", "sampling",
-                "antithetic", "annealer", "sigma_min", "orthogonal", "parallel", "record_x",
-                "keep_history", "final_evaluation", "checkpoint", "checkpoint_every"},
-    "spsa": {"budget", "sigma0", "bounds", "callback", "iterations", "lr", "annealer", "sigma_min",
-             "record_x", "keep_history", "final_evaluation", "checkpoint", "checkpoint_every"},
-    "fd": {"budget", "bounds", "callback", "iterations", "lr", "step", "record_x", "keep_history",
-           "final_evaluation", "checkpoint", "checkpoint_every"},
+    "adaptive": EVERY | {"sigma0", "target", "population", "restarts", "stop_when_stalled",
+                         "workers", "disp", "patience", "on_failure"},
+    "polished": EVERY | {"sigma0", "target", "population", "restarts", "polish", "lr", "samples",
+                         "stop_when_stalled", "workers", "disp", "patience", "on_failure"},
+    "plateau": EVERY | {"sigma0", "iterations", "lr", "samples", "sampling", "antithetic",
+                        "annealer", "sigma_min", "orthogonal", "parallel", "record_x",
+                        "final_evaluation", "workers", "disp", "on_failure"},
+    "spsa": EVERY | {"sigma0", "iterations", "lr", "annealer", "sigma_min", "record_x",
+                     "final_evaluation"},
+    "fd": EVERY | {"iterations", "lr", "step", "record_x", "final_evaluation"},
 }  # fmt: skip
 
 
@@ -72,7 +74,8 @@ def test_an_option_of_another_method_is_a_value_error_naming_it(method, name):
     with pytest.raises(ValueError, match=named):
         plateau_free.minimize(staircase, X0, method=method, **options)
     if canonical in ("adaptive", "polished", "plateau") and name not in (
-        "callback", "parallel", "checkpoint", "checkpoint_every", "step",  # minimize's alone
+        "callback", "parallel", "checkpoint", "checkpoint_every", "step", "workers", "disp",
+        "args",  # minimize's alone
     ):
         with pytest.raises(ValueError, match=named):
             plateau_free.ask_tell(X0, method=method, **options)
@@ -80,7 +83,9 @@ def test_an_option_of_another_method_is_a_value_error_naming_it(method, name):
 
 @pytest.mark.parametrize("method", ["adaptive", "polished", "plateau", "spsa", "fd"])
 def test_every_option_a_method_takes_is_accepted(method):
-    options = {name: VALUES[name] for name in TAKES[method] if name not in ("checkpoint", "callback")}
+    options = {
+        name: VALUES[name] for name in TAKES[method] if name not in ("checkpoint", "callback", "args")
+    }
     if method == "plateau":
         options.update(antithetic=True, orthogonal=False, sampling="radial")  # a valid combination
     if method == "polished":
@@ -92,7 +97,6 @@ def test_every_option_a_method_takes_is_accepted(method):
 
 # (options, the text the error must hold): every option, every wrong type; the value as written.
 BAD = [
-    (dict(seed=None), "seed = None must be a whole number from 0 to 2**64 - 1"),
     (dict(seed=-1), "seed = -1 must be a whole number from 0 to 2**64 - 1"),
     (dict(seed=1.5), "seed = 1.5 must be a whole number"),
     (dict(seed=2**64), "seed = 18446744073709551616 must be a whole number"),
@@ -121,6 +125,15 @@ BAD = [
     (dict(population=1), "population = 1 must be a whole number from 2"),
     (dict(population=4.5), "population = 4.5 must be a whole number from 2"),
     (dict(restarts="yes"), "restarts = 'yes' must be True or False"),
+    (dict(on_failure="ignore"), "on_failure = 'ignore' is not a policy: use 'continue' or 'raise'"),
+    (dict(on_failure=True), "on_failure = True is not a policy"),
+    (dict(workers=0), "workers = 0 must be a whole number of threads from 1"),
+    (dict(workers="many"), "workers = 'many' must be a number of threads"),
+    (dict(batched=True, workers=2), "workers = 2: a batched fun evaluates its batch itself"),
+    (dict(sigma0=[1.0, 0.0, 1.0]), "sigma0 = [1.0, 0.0, 1.0] must be a finite number > 0, or one per coordinate"),
+    (dict(sigma0=[1.0, 1.0]), "sigma0 has 2 spreads, x0 has 3 coordinates"),
+    (dict(method="plateau", sigma0=[1.0, 1.0, 1.0]), "method='plateau' takes one number"),
+    (dict(patience=-1), "patience = -1 must be a whole number of restarts from 0"),
     (dict(restarts=1), "restarts = 1 must be True or False"),
     (dict(batched=1), "batched = 1 must be True or False"),
     (dict(seeded=None), "seeded = None must be True or False"),
@@ -192,7 +205,7 @@ def test_errors_name_the_option_and_show_the_value(tmp_path, monkeypatch, option
 @pytest.mark.parametrize(
     "options, text",
     [
-        (dict(seed=None), "seed = None must be a whole number"),
+        (dict(seed="1"), "seed = '1' must be a whole number"),
         (dict(budget="a"), "budget = 'a' must be a whole number"),
         (dict(x0=None), "x0 = None must be an array of numbers"),
         (dict(method="fd"), "method = 'fd' is not a method of ask_tell"),

@@ -39,10 +39,10 @@ def test_the_polish_finishes_the_papers_loop(seed):
     assert polished.fun < 0.25 * alone.fun, (polished.fun, alone.fun)
     assert polished.fun == cone_in_a_plateau(polished.x)  # the best point seen, its value
     assert polished.nfev == 800
-    assert polished.nit > 299  # the loop's iterations (600 evaluations), then generations
+    assert polished.nit > 199  # the loop's iterations (400 evaluations), then generations
     assert polished.message.startswith("budget spent") and polished.status == 1 and not polished.success
     assert isinstance(polished.restarts, int) and polished.sigma > 0.0
-    assert polished.history is None and polished.x.shape == (2,)
+    assert isinstance(polished.history, plateau_free.SearchHistory) and polished.x.shape == (2,)
     again = plateau_free.minimize(
         cone_in_a_plateau, START, method="polished", budget=800, seed=seed, **LOOP
     )
@@ -82,12 +82,12 @@ def test_seeded_and_bounded_bit_identical():
     x0 = [0.5, -0.5, 0.5]
     bounds = ([-4.0] * 3, [4.0] * 3)
     rust = _native._rust_reference_minimize_adaptive(
-        x0, budget=500, seed=11, bounds=bounds, seeded=True, paper=(2, 0.02, 0.5), polish=0.25
+        x0, budget=500, seed=11, bounds=bounds, seeded=True, paper=(2, 0.02, 0.5), polish=0.5
     )
     result = plateau_free.minimize(
         staircase_seeded, x0, method="polished", budget=500, seed=11, bounds=(-4.0, 4.0), seeded=True
     )
-    same(result, rust)  # the defaults: samples 2, lr 0.02, sigma0 0.5, polish 0.25
+    same(result, rust)  # the defaults: samples 2, lr 0.02, sigma0 0.5, polish 0.5
 
 
 def test_callback_sees_every_iteration_and_can_stop():
@@ -151,8 +151,6 @@ def test_options_that_do_not_apply():
                         ("orthogonal", True), ("parallel", True), ("record_x", True), ("final_evaluation", False)]:
         with pytest.raises(ValueError, match=f"{name} = {value!r}: not an option of method='polished'"):
             run(budget=100, **{name: value})
-    with pytest.raises(ValueError, match="checkpoint = 'never-written.json': not an option of method='polished'"):
-        run(budget=100, checkpoint="never-written.json")
 
 
 def test_bad_loop_options():
@@ -168,7 +166,7 @@ def test_bad_loop_options():
         for value in (0.0, -1.0, math.nan, math.inf):
             with pytest.raises(ValueError, match=f"{name} = {value!r} must be a finite number > 0"):
                 run(**{name: value})
-    with pytest.raises(ValueError, match=r"bounds\[0\] = \(None, 1\.0\): method='polished' needs finite bounds"):
+    with pytest.raises(ValueError, match=r"x0\[0\] = 1\.5 is outside bounds\[0\] = \(None, 1\.0\)"):
         run(bounds=[(None, 1.0), (-1.0, 1.0)])
     with pytest.raises(ValueError, match="population = 1 must be a whole number from 2"):
         run(population=1)

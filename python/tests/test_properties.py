@@ -336,6 +336,8 @@ def test_minimize_with_an_objective_that_raises_or_returns_non_numbers(method, b
         return bad_batch(what, len(x)) if batched else what
 
     options = dict(budget=40, seed=seed, batched=batched, seeded=seeded)
+    if method in ("adaptive", "plateau", "polished"):
+        options["on_failure"] = "raise"  # the baselines end on a failure anyway
     if method == "polished":
         options["polish"] = 0.5
     result, error = None, None
@@ -479,9 +481,10 @@ MISTAKES = ["ask again", "shorter", "longer", "nothing", "nan", "inf", "none", "
 
 
 def make_run(method, x0, seed):
+    """A run that refuses non-finite values (``on_failure='raise'``), to test the refusals."""
     if method == "plateau":
-        return plateau_free.ask_tell(x0, method=method, iterations=6, seed=seed)
-    return plateau_free.ask_tell(x0, method=method, budget=40, seed=seed)
+        return plateau_free.ask_tell(x0, method=method, iterations=6, seed=seed, on_failure="raise")
+    return plateau_free.ask_tell(x0, method=method, budget=40, seed=seed, on_failure="raise")
 
 
 def make_mistake(es, mistake, X):

@@ -55,7 +55,7 @@ def test_a_floor_stops_one_window_after_the_last_improvement(seed, fraction):
     calls = []
     result = plateau_free.minimize(
         recorded(calls), [8.0, -6.0], budget=budget, seed=seed, batched=True,
-        stop_when_stalled=fraction,
+        stop_when_stalled=fraction, patience=0,
     )  # fmt: skip
     window = math.ceil(fraction * budget)
     assert calls[0][0] == 1  # x0, alone; the rule judges from the first generation
@@ -77,11 +77,11 @@ def test_a_floor_stops_one_window_after_the_last_improvement(seed, fraction):
 def test_the_smallest_and_largest_fraction_and_the_constant():
     assert plateau_free.STALL_WINDOW == 0.2
     # A window of the whole budget can never see a full window pass: the budget ends the run.
-    whole = plateau_free.minimize(floor, [8.0, -6.0], budget=600, stop_when_stalled=1.0)
+    whole = plateau_free.minimize(floor, [8.0, -6.0], budget=600, stop_when_stalled=1.0, patience=0)
     assert whole.message.startswith("budget spent") and whole.status == 1
     # The smallest window (one evaluation, rounded up) stops at the first generation with no
     # improvement on the best.
-    tiny = plateau_free.minimize(floor, [8.0, -6.0], budget=600, stop_when_stalled=1e-9)
+    tiny = plateau_free.minimize(floor, [8.0, -6.0], budget=600, stop_when_stalled=1e-9, patience=0)
     assert tiny.message.startswith("stalled") and tiny.nfev < 600
 
 
@@ -128,7 +128,7 @@ def test_polished_is_judged_from_the_hand_over():
     budget, calls = 4000, []
     result = plateau_free.minimize(
         recorded(calls), [8.0, -6.0], method="polished", budget=budget, polish=0.5, samples=2,
-        batched=True, stop_when_stalled=0.2,
+        batched=True, stop_when_stalled=0.2, patience=0,
     )  # fmt: skip
     assert result.message.startswith("stalled") and (result.success, result.status) == (True, 0)
     assert result.fun == 0.0 and result.nfev == sum(n for n, _ in calls) < budget
@@ -144,7 +144,7 @@ def test_polished_is_judged_from_the_hand_over():
 
 @pytest.mark.parametrize("method", ["adaptive", "polished"])
 def test_ask_tell_is_minimize_with_the_rule(method):
-    options = dict(budget=3000, seed=4, stop_when_stalled=0.1)
+    options = dict(budget=3000, seed=4, stop_when_stalled=0.1, patience=0)
     if method == "polished":
         options.update(method="polished", samples=2)
     expected = plateau_free.minimize(floor, [8.0, -6.0], **options)

@@ -261,6 +261,7 @@ impl AskTell {
                 budget,
                 evaluations: 0,
                 best: Best::new(x0),
+                failures: 0,
             },
         })
     }

@@ -5,7 +5,7 @@
 use std::fmt;
 
 use super::ask::{count, non_finite};
-use super::options::Options;
+use super::options::{FailurePolicy, Options};
 use crate::error::Error;
 use crate::objective::Points;
 // For the documentation's links only.
@@ -105,9 +105,10 @@ impl Best {
     }
 
     /// Takes every point better than the best so far, in order (the first of equals wins).
+    /// A failed point (NaN or an infinity) is never the best.
     pub(crate) fn see(&mut self, points: Points<'_>, values: &[f64]) {
         for (point, &v) in points.iter().zip(values) {
-            if v < self.fun {
+            if v.is_finite() && v < self.fun {
                 self.fun = v;
                 self.x.copy_from_slice(point);
             }
@@ -124,22 +125,29 @@ pub(crate) struct Ledger {
     pub(crate) budget: usize,
     pub(crate) evaluations: usize,
     pub(crate) best: Best,
+    /// Evaluations told whose value was NaN or infinite.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub(crate) failures: usize,
 }
 
 impl Ledger {
-    /// Takes the told `values` of the asked `points`: checks their count and that every
-    /// value is finite (the error names the first that is not by its index in the run's
-    /// evaluations), then counts them and keeps the best. On error nothing has changed.
+    /// Takes the told `values` of the asked `points`: checks their count and, under
+    /// [`FailurePolicy::Raise`], that every value is finite (the error names the first that
+    /// is not by its index in the run's evaluations), then counts them and keeps the best.
+    /// On error nothing has changed.
     pub(crate) fn take(&mut self, points: Points<'_>, values: &[f64]) -> Result<(), Error> {
         count(points.len(), values.len())?;
-        non_finite(values, points, self.evaluations)?;
+        if self.options.on_failure == FailurePolicy::Raise {
+            non_finite(values, points, self.evaluations)?;
+        }
         self.count(points, values);
         Ok(())
     }
 
-    /// Counts values already checked and keeps the best.
+    /// Counts values already checked (and their failures) and keeps the best.
     pub(crate) fn count(&mut self, points: Points<'_>, values: &[f64]) {
         self.best.see(points, values);
+        self.failures += values.iter().filter(|v| !v.is_finite()).count();
         self.evaluations += values.len();
     }
 
@@ -169,7 +177,7 @@ impl Ledger {
             restarts,
             sigma,
             stop,
-            failures: 0,
+            failures: self.failures,
         }
     }
 }

@@ -21,6 +21,9 @@ pub use history::{History, HistoryKeep, OptimizerState, RunError};
 pub(crate) use minimum::{Best, Ledger};
 pub use minimum::{Minimum, Stop};
 pub(crate) use options::Options;
-pub use options::{FailurePolicy, Metric, Strategy, FULL_METRIC_LIMIT, FULL_METRIC_MAX_DIM};
+pub use options::{
+    FailurePolicy, Metric, Strategy, DEFAULT_PATIENCE, DEFAULT_POLISH, FULL_METRIC_LIMIT,
+    FULL_METRIC_MAX_DIM,
+};
 pub(crate) use stall::check_fraction;
 pub use stall::{Stall, STALL_WINDOW};

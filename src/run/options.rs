@@ -56,13 +56,23 @@ pub enum Metric {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum FailurePolicy {
-    /// The run goes on: a failed point ranks below every finite value, is counted in
-    /// [`crate::Minimum::failures`] and is never the best point.
+    /// The run goes on (the default): a failed point ranks below every finite value, is
+    /// counted in [`crate::Minimum::failures`] and is never the best point.
+    #[default]
     Continue,
     /// The run ends with [`Error::NonFiniteValue`] naming the point.
-    #[default]
     Raise,
 }
+
+/// The share of the budget that polishes [`Strategy::Paper`]'s loop when
+/// [`crate::Minimizer::polish`] is not set: the adaptive search finishes the descent that
+/// Adam's fixed learning rate leaves about `lr` from the optimum (`docs/convergence.md`,
+/// "Renders to the paper's answer").
+pub const DEFAULT_POLISH: f64 = 0.5;
+
+/// The default [`crate::Minimizer::patience`]: the run is done when one restart converges
+/// back at the best point seen before it.
+pub const DEFAULT_PATIENCE: usize = 1;
 
 /// The largest dimension for which [`Metric::Auto`] learns a full covariance.
 pub const FULL_METRIC_MAX_DIM: usize = 200;
@@ -81,6 +91,9 @@ pub(crate) struct Options {
     pub(crate) budget: Option<usize>,
     pub(crate) seed: u64,
     pub(crate) sigma0: Option<f64>,
+    /// [`crate::Minimizer::sigma0_each`].
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub(crate) sigma0_each: Option<Vec<f64>>,
     #[cfg_attr(feature = "serde", serde(with = "crate::saved::float_box"))]
     pub(crate) bounds: Option<(Vec<f64>, Vec<f64>)>,
     #[cfg_attr(feature = "serde", serde(with = "crate::saved::float_option"))]
@@ -92,7 +105,9 @@ pub(crate) struct Options {
     pub(crate) metric: Metric,
     pub(crate) restart_from_best: bool,
     pub(crate) strategy: Strategy,
-    pub(crate) polish: f64,
+    /// [`crate::Minimizer::polish`] as set (`None`: [`DEFAULT_POLISH`] with
+    /// [`Strategy::Paper`], none with [`Strategy::Adaptive`]).
+    pub(crate) polish: Option<f64>,
     /// [`crate::Minimizer::stop_when_stalled`]'s window, a fraction of the budget (`None`:
     /// the budget alone ends the run).
     #[cfg_attr(feature = "serde", serde(default, with = "crate::saved::float_option"))]
@@ -100,6 +115,9 @@ pub(crate) struct Options {
     /// [`crate::Minimizer::on_failure`].
     #[cfg_attr(feature = "serde", serde(default))]
     pub(crate) on_failure: FailurePolicy,
+    /// [`crate::Minimizer::patience`] (0: off).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub(crate) patience: usize,
 }
 
 impl Default for Options {
@@ -117,14 +135,26 @@ impl Default for Options {
             metric: Metric::Auto,
             restart_from_best: true,
             strategy: Strategy::Adaptive,
-            polish: 0.0,
+            polish: None,
             stall: None,
             on_failure: FailurePolicy::default(),
+            patience: DEFAULT_PATIENCE,
+            sigma0_each: None,
         }
     }
 }
 
 impl Options {
+    /// The share of the budget that polishes the paper's loop: as set, else
+    /// [`DEFAULT_POLISH`] with [`Strategy::Paper`] and none with [`Strategy::Adaptive`].
+    pub(crate) fn polish(&self) -> f64 {
+        match (self.polish, self.strategy) {
+            (Some(fraction), _) => fraction,
+            (None, Strategy::Paper { .. }) => DEFAULT_POLISH,
+            (None, Strategy::Adaptive) => 0.0,
+        }
+    }
+
     /// Checks the options and the start; returns the budget.
     pub(crate) fn check(&self, x0: &[f64]) -> Result<usize, Error> {
         check::theta(x0)?;
@@ -178,33 +208,26 @@ impl Options {
             }
         }
         if let Some((lo, hi)) = &self.bounds {
+            // Infinite entries are open sides; NaN or crossed bounds are errors.
             check::len("lower bounds", lo.len(), n)?;
             check::len("upper bounds", hi.len(), n)?;
-            for (index, (&l, &u)) in lo.iter().zip(hi).enumerate() {
-                if !l.is_finite() || !u.is_finite() || l > u {
-                    return Err(Error::InvalidBounds {
-                        index,
-                        lower: l,
-                        upper: u,
-                    });
-                }
-            }
+            check::bounds(lo, hi)?;
             check::inside("x0", x0, lo, hi)?;
         }
-        if !(0.0..1.0).contains(&self.polish) {
-            return Err(Error::InvalidParameter {
-                name: "polish",
-                value: self.polish.into(),
-                reason: "must be a fraction of the budget in [0, 1)",
-            });
+        if let Some(each) = &self.sigma0_each {
+            check::len("sigma0_each", each.len(), n)?;
+            for &s in each {
+                check::positive("sigma0_each", s)?;
+            }
+            if self.sigma0.is_some() {
+                return Err(Error::InvalidParameter {
+                    name: "sigma0_each",
+                    value: each[0].into(),
+                    reason: "and sigma0 both set the starting spread: set one",
+                });
+            }
         }
-        if self.polish > 0.0 && self.strategy == Strategy::Adaptive {
-            return Err(Error::InvalidParameter {
-                name: "polish",
-                value: self.polish.into(),
-                reason: "polishes the paper's loop: it needs Strategy::Paper",
-            });
-        }
+        self.check_polish()?;
         if let Some(fraction) = self.stall {
             super::check_fraction(fraction)?;
         }
@@ -224,5 +247,27 @@ impl Options {
             check::positive("sigma0", sigma0)?;
         }
         Ok(budget)
+    }
+
+    /// The polish as set: a fraction in `[0, 1)`, and only with [`Strategy::Paper`].
+    fn check_polish(&self) -> Result<(), Error> {
+        let Some(polish) = self.polish else {
+            return Ok(());
+        };
+        if !(0.0..1.0).contains(&polish) {
+            return Err(Error::InvalidParameter {
+                name: "polish",
+                value: polish.into(),
+                reason: "must be a fraction of the budget in [0, 1)",
+            });
+        }
+        if polish > 0.0 && self.strategy == Strategy::Adaptive {
+            return Err(Error::InvalidParameter {
+                name: "polish",
+                value: polish.into(),
+                reason: "polishes the paper's loop: it needs Strategy::Paper",
+            });
+        }
+        Ok(())
     }
 }

@@ -7,7 +7,7 @@ use super::Sparsity;
 use crate::check;
 use crate::error::Error;
 use crate::objective::Points;
-use crate::run::Ask;
+use crate::run::{Ask, FailurePolicy};
 use crate::seeding::stream_seed;
 use crate::{Annealer, PAPER_SIGMA_MIN};
 
@@ -76,6 +76,7 @@ pub struct LeastSquares {
     seed: u64,
     smoothed_residuals: bool,
     max_step: f64,
+    on_failure: FailurePolicy,
 }
 
 impl LeastSquares {
@@ -98,6 +99,7 @@ impl LeastSquares {
             seed: 0,
             smoothed_residuals: false,
             max_step: 1.0,
+            on_failure: FailurePolicy::Continue,
         }
     }
 
@@ -179,6 +181,16 @@ impl LeastSquares {
         self
     }
 
+    /// What the run does with a point whose outputs are not all finite (default
+    /// [`FailurePolicy::Continue`]: a failed pair is left out of its Jacobian estimate, a
+    /// failed step is refused and tried again shorter, and the failures are counted in
+    /// [`VectorMinimum::failures`]; [`FailurePolicy::Raise`]: the run ends with
+    /// [`Error::NonFiniteValue`]).
+    pub fn on_failure(mut self, policy: FailurePolicy) -> Self {
+        self.on_failure = policy;
+        self
+    }
+
     /// Every option's rule, and `x0` against the pattern and the box.
     fn validate(&self, x0: &[f64]) -> Result<(), Error> {
         check::theta(x0)?;
@@ -233,7 +245,8 @@ impl LeastSquares {
     /// (a slice reused from call to call: no allocation per evaluation).
     ///
     /// # Errors
-    /// As [`LeastSquares::ask_tell`]; a non-finite output ([`Error::NonFiniteValue`]).
+    /// As [`LeastSquares::ask_tell`]; a non-finite output under [`FailurePolicy::Raise`]
+    /// ([`Error::NonFiniteValue`]).
     pub fn run<F>(&self, mut r: F, x0: &[f64]) -> Result<VectorMinimum, Error>
     where
         F: FnMut(&[f64], u64, &mut [f64]),
@@ -299,6 +312,9 @@ pub struct VectorMinimum {
     pub jacobians: usize,
     /// Evaluations of `r` (at most the budget).
     pub nfev: usize,
+    /// Evaluations with a non-finite output ([`LeastSquares::on_failure`]); never the best
+    /// point (`fun` is infinite only when every evaluation failed).
+    pub failures: usize,
 }
 
 /// What the next ask evaluates.
@@ -355,6 +371,7 @@ pub struct LeastSquaresAskTell {
     nfev: usize,
     nit: usize,
     jacobians: usize,
+    failures: usize,
 }
 
 impl LeastSquaresAskTell {
@@ -379,6 +396,7 @@ impl LeastSquaresAskTell {
             nfev: 0,
             nit: 0,
             jacobians: 0,
+            failures: 0,
             opts,
         }
     }
@@ -461,7 +479,8 @@ impl LeastSquaresAskTell {
     ///
     /// # Errors
     /// [`Error::NothingAsked`]; [`Error::LengthMismatch`] for a count other than points x
-    /// outputs; [`Error::NonFiniteValue`] naming the first non-finite output's point. After
+    /// outputs; under [`FailurePolicy::Raise`], [`Error::NonFiniteValue`] naming the first
+    /// non-finite output's point. After
     /// an error nothing has changed: the points still wait for their outputs.
     pub fn tell(&mut self, outputs: &[f64]) -> Result<(), Error> {
         if !self.pending {
@@ -471,23 +490,33 @@ impl LeastSquaresAskTell {
         let k = self.seeds.len();
         check::len("outputs (points x outputs)", outputs.len(), k * m)?;
         let points = &self.points;
-        check_outputs(
-            outputs,
-            m,
-            |p| points[p * n..(p + 1) * n].to_vec(),
-            self.nfev,
-        )?;
+        if self.opts.on_failure == FailurePolicy::Raise {
+            check_outputs(
+                outputs,
+                m,
+                |p| points[p * n..(p + 1) * n].to_vec(),
+                self.nfev,
+            )?;
+        }
         self.pending = false;
         self.nfev += k;
+        self.failures += outputs.chunks_exact(m).filter(|r| failed(r)).count();
         match self.phase {
             Phase::Start => {
-                self.fun = sum_of_squares(outputs);
+                self.fun = if failed(outputs) {
+                    f64::INFINITY
+                } else {
+                    sum_of_squares(outputs)
+                };
                 self.residuals = outputs.to_vec();
                 self.phase = Phase::Pairs;
             }
             Phase::Pairs => {
                 self.estimate(outputs);
-                self.propose();
+                // With no pair's estimate yet (every pair failed), new pairs are drawn.
+                if self.jac_count > 0 {
+                    self.propose();
+                }
             }
             Phase::Step => self.judge(outputs),
             Phase::Done => unreachable!("nothing is asked once done"),
@@ -504,22 +533,29 @@ impl LeastSquaresAskTell {
         for (k, tau) in self.taus.chunks_exact(n).enumerate() {
             let plus = &outputs[2 * k * m..(2 * k + 1) * m];
             let minus = &outputs[(2 * k + 1) * m..(2 * k + 2) * m];
-            acc.add(sp, tau, self.sigma, plus, minus);
+            // A pair with a failed point says nothing about the slope: it is left out.
+            if !failed(plus) && !failed(minus) {
+                acc.add(sp, tau, self.sigma, plus, minus);
+            }
+        }
+        self.jacobians += 1;
+        self.rejections = 0;
+        if acc.pairs == 0 {
+            return;
         }
         let fresh = acc.finish();
-        self.jacobians += 1;
         self.jac_count = (self.jac_count + 1).min(self.opts.memory);
         let w = 1.0 / self.jac_count as f64;
         for (j, f) in self.jac.iter_mut().zip(&fresh.values) {
             *j += w * (f - *j);
         }
         self.smoothed = fresh.residuals;
-        self.rejections = 0;
     }
 
     /// Solves for the damped step from theta and writes its point (clamped) as the next ask.
     fn propose(&mut self) {
-        let residuals = if self.opts.smoothed_residuals {
+        // A failed current point (the start) has no residuals of its own.
+        let residuals = if self.opts.smoothed_residuals || !self.fun.is_finite() {
             &self.smoothed
         } else {
             &self.residuals
@@ -546,7 +582,9 @@ impl LeastSquaresAskTell {
     /// Takes or refuses the step whose outputs were told.
     fn judge(&mut self, outputs: &[f64]) {
         let fun = sum_of_squares(outputs);
-        if fun <= self.fun || self.opts.acceptance == Acceptance::Always {
+        let taken = fun <= self.fun || self.opts.acceptance == Acceptance::Always;
+        // A failed step's point is never taken.
+        if taken && !failed(outputs) {
             std::mem::swap(&mut self.theta, &mut self.points);
             self.fun = fun;
             self.residuals = outputs.to_vec();
@@ -616,8 +654,14 @@ impl LeastSquaresAskTell {
             nit: self.nit,
             jacobians: self.jacobians,
             nfev: self.nfev,
+            failures: self.failures,
         }
     }
+}
+
+/// Whether a point failed: one of its outputs is NaN or infinite.
+fn failed(outputs: &[f64]) -> bool {
+    outputs.iter().any(|v| !v.is_finite())
 }
 
 /// `sum_i r_i^2`.

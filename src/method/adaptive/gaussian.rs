@@ -24,7 +24,9 @@
 //! - **flat generation**: when the best quarter of a generation ties with its best value, the
 //!   points cannot be told apart; `sigma` grows by `exp(0.2 + c_sigma / d_sigma)` so that the
 //!   smoothing widens until it feels a change of `f` (the paper's large `sigma_0`, found
-//!   automatically instead of guessed).
+//!   automatically instead of guessed). Not at a flat bottom: ties at the search's best
+//!   level with worse points around are the floor of a flat region, where growth would not
+//!   stop; three such generations end the run (`gaussian/ends.rs`).
 //! - **restarts from the best point seen** with a doubled population (IPOP: Auger and Hansen,
 //!   CEC 2005) when a run has converged or stalls; a larger population is a smoother, more
 //!   global estimate of the smoothed function's gradient, which multimodal functions need.
@@ -38,6 +40,10 @@ use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
+
+mod ends;
+
+pub(crate) use ends::RunEnd;
 
 /// The strategy parameters for a dimension and population size (Hansen 2016, Table 1).
 #[derive(Debug, Clone)]
@@ -114,23 +120,6 @@ impl Params {
     }
 }
 
-/// Why one run of the search distribution ended (and a restart is due).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum RunEnd {
-    /// The spread became negligible next to the mean (converged to the working precision).
-    TolX,
-    /// A flat generation at a spread below `1e-6` of the mean: the objective's resolution.
-    Resolution,
-    /// The values of the last generations are all within `1e-12` of each other.
-    TolFun,
-    /// The covariance's condition number passed `1e14`.
-    Condition,
-    /// The best value of a generation has not improved for a long window.
-    Stagnation,
-    /// The spread grew beyond `1e8` times its start: the function looks flat everywhere.
-    Flat,
-}
-
 /// One run: a Gaussian `N(m, sigma^2 C)` and its evolution paths.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub(crate) struct SearchGaussian {
@@ -162,6 +151,17 @@ pub(crate) struct SearchGaussian {
     /// The two-point step-size adaptation's warm-up (diagonal metric only): see [`Tpa`].
     #[cfg_attr(feature = "serde", serde(default))]
     tpa: Tpa,
+    /// The range of the finite values of the run's first generation that had two different
+    /// ones: the run's scale of `f` for TolFun (`None` before: scale 1).
+    #[cfg_attr(feature = "serde", serde(default, with = "crate::saved::float_option"))]
+    first_range: Option<f64>,
+    /// Flat generations in a row at the run's best level with worse points around: the
+    /// bottom of a flat region, seen from inside.
+    #[cfg_attr(feature = "serde", serde(default))]
+    flat_bottom: usize,
+    /// Whether a generation of this run was flat (its values tie).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub ties: bool,
 }
 
 /// A warm-up of two-point step-size adaptation (TPA: Hansen, "CMA-ES with Two-Point Step-Size
@@ -285,6 +285,9 @@ impl SearchGaussian {
             mirrored: false,
             flat_growth: true,
             tpa: Tpa::default(),
+            first_range: None,
+            flat_bottom: 0,
+            ties: false,
         }
     }
 
@@ -429,8 +432,10 @@ impl SearchGaussian {
     }
 
     /// Updates the distribution from a generation's offsets (already repaired to the points
-    /// actually evaluated) and their values. Returns why the run should end, if it should.
-    pub fn update(&mut self, ys: &[DVector<f64>], values: &[f64]) -> Option<RunEnd> {
+    /// actually evaluated) and their values, a failed point's value `+inf` (at least one
+    /// finite); `level` is the best value the whole search has seen, this generation
+    /// included. Returns why the run should end, if it should.
+    pub fn update(&mut self, ys: &[DVector<f64>], values: &[f64], level: f64) -> Option<RunEnd> {
         let n = self.n;
         let nf = n as f64;
         let p = &self.p;
@@ -438,10 +443,27 @@ impl SearchGaussian {
         let mut order: Vec<usize> = (0..lambda).collect();
         order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
         let best = values[order[0]];
-        let worst = values[order[lambda - 1]];
+        // The worst finite value (failures rank below it).
+        let worst = order
+            .iter()
+            .rev()
+            .map(|&k| values[k])
+            .find(|v| v.is_finite());
+        let worst = worst.unwrap_or(best);
+        if self.first_range.is_none() && worst > best {
+            self.first_range = Some(worst - best);
+        }
         // A flat generation: the best quarter ties (measured against half and a tenth, and
         // against counting distinct values: docs/convergence.md).
         let flat = values[order[lambda / 4]] == best;
+        self.ties |= flat;
+        // Ties are a plateau to cross when they lie above the search's best level, or when
+        // every point ties (nothing but the plateau in sight). Ties at the best level with
+        // worse points around are the bottom of a flat region (the optimum's, or a step's of
+        // the best value): growing sigma there grows it without bound (the staircase's
+        // optimum), so it does not grow, and three such generations in a row end the run.
+        let bottom = flat && best <= level && worst > best;
+        self.flat_bottom = if bottom { self.flat_bottom + 1 } else { 0 };
 
         // Mean: the rank-weighted natural-gradient step.
         let mut yw = DVector::zeros(n);
@@ -514,7 +536,7 @@ impl SearchGaussian {
         let csa = (cs / self.p.ds * (ps_norm / self.p.chi_n - 1.0)).min(1.0);
         let step = self.log_step(csa, paired, values, yw);
         self.sigma *= step.exp();
-        if flat && self.flat_growth {
+        if flat && !bottom && self.flat_growth {
             self.sigma *= (0.2 + cs / self.p.ds).exp();
         }
         self.generation += 1;
@@ -536,6 +558,16 @@ impl SearchGaussian {
         self.check_end(flat, best, worst)
     }
 
+    /// A generation in which every point failed: no value to rank, so the mean stays and
+    /// sigma halves (the points were drawn too far into the region where `f` fails). The
+    /// run ends when the spread has collapsed.
+    pub fn failed_generation(&mut self) -> Option<RunEnd> {
+        self.sigma *= 0.5;
+        self.generation += 1;
+        let widest = (0..self.n).map(|i| self.variance(i)).fold(0.0, f64::max);
+        (self.sigma * widest.sqrt() < 1e-12 * self.sigma_start).then_some(RunEnd::TolX)
+    }
+
     fn decompose(&mut self) {
         self.eigen_generation = self.generation;
         let Some((cov, b)) = &mut self.full else {
@@ -547,61 +579,6 @@ impl SearchGaussian {
         self.d = eig.eigenvalues.map(|e| e.max(floor).sqrt());
         *b = eig.eigenvectors;
         *cov = &*b * DMatrix::from_diagonal(&self.d.map(|d| d * d)) * b.transpose();
-    }
-
-    fn check_end(&self, flat: bool, best: f64, worst: f64) -> Option<RunEnd> {
-        let n = self.n;
-        let max_d = self.d.max();
-        let min_d = self.d.min();
-        let diag_max = (0..n).map(|i| self.variance(i)).fold(0.0, f64::max).sqrt();
-        if self.sigma * max_d > 1e8 * self.sigma_start {
-            return Some(RunEnd::Flat);
-        }
-        if self.sigma * diag_max < 1e-12 * self.sigma_start
-            || (0..n).all(|i| {
-                let m = self.mean[i];
-                m + 0.2 * self.sigma * self.variance(i).sqrt() == m
-            })
-        {
-            return Some(RunEnd::TolX);
-        }
-        // A flat generation whose spread is below a millionth of the mean is not a plateau to
-        // cross but the objective's resolution (a renderer computing in single precision
-        // cannot tell such points apart): growing the spread there makes it random-walk on
-        // rounding noise (seen on CUP: 150 generations at 1e-8 to 1e-6). The run has
-        // converged; a restart, which keeps the best point, is worth more.
-        let m_scale = self.mean.iter().fold(1.0f64, |a, m| a.max(m.abs()));
-        if flat && self.sigma * diag_max < 1e-6 * m_scale {
-            return Some(RunEnd::Resolution);
-        }
-        if (max_d / min_d).powi(2) > 1e14 {
-            return Some(RunEnd::Condition);
-        }
-        let lambda = self.p.lambda as f64;
-        let window = 10 + (30.0 * n as f64 / lambda).ceil() as usize;
-        if !flat && self.best_history.len() >= window {
-            let recent = &self.best_history[self.best_history.len() - window..];
-            let hi = recent.iter().copied().fold(worst, f64::max);
-            let lo = recent.iter().copied().fold(best, f64::min);
-            if hi - lo <= 1e-12f64.max(1e-15 * lo.abs()) {
-                return Some(RunEnd::TolFun);
-            }
-        }
-        let stall = 120 + (30.0 * n as f64 / lambda).ceil() as usize;
-        let median = |s: &[f64]| {
-            let mut v = s.to_vec();
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2]
-        };
-        // Neither the generations' best nor their median values improved over the window.
-        let stalled = |h: &[f64]| {
-            h.len() >= stall + 20
-                && median(&h[h.len() - 20..]) >= median(&h[h.len() - stall - 20..h.len() - stall])
-        };
-        if stalled(&self.best_history) && stalled(&self.median_history) {
-            return Some(RunEnd::Stagnation);
-        }
-        None
     }
 }
 

@@ -5,6 +5,9 @@
 //! [`crate::AskTell`], and the polish after the paper's loop (`../polished.rs`).
 
 mod gaussian;
+mod repeats;
+
+use std::borrow::Cow;
 
 use nalgebra::DVector;
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -13,6 +16,7 @@ use crate::error::Error;
 use crate::objective::Points;
 use crate::run::{Ask, Ledger, Metric, Minimum, Options, Stall, Stop, FULL_METRIC_MAX_DIM};
 use gaussian::{rng, Params, SearchGaussian};
+use repeats::Repeats;
 
 /// The adaptive search between asks: `Minimizer`'s loop over runs and generations, unrolled.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -41,29 +45,15 @@ pub(crate) struct Adaptive {
     /// a checkpoint written before it was kept).
     #[cfg_attr(feature = "serde", serde(default))]
     run_reference: Option<f64>,
+    /// The converged runs, for [`crate::Minimizer::patience`].
+    #[cfg_attr(feature = "serde", serde(default))]
+    repeats: Repeats,
 }
 
 impl Adaptive {
     pub(crate) fn new(o: &Options, x0: &[f64]) -> Adaptive {
         let n = x0.len();
-        // The start spread and the covariance's starting scales: from the box, else from x0.
-        let (sigma0, scales) = match (&o.bounds, o.sigma0) {
-            (Some((lo, hi)), s) => {
-                let widths: Vec<f64> = lo.iter().zip(hi).map(|(l, u)| u - l).collect();
-                let mean = widths.iter().sum::<f64>() / n as f64;
-                if mean > 0.0 {
-                    let scales = widths.iter().map(|w| (w / mean).max(1e-12)).collect();
-                    (s.unwrap_or(0.25 * mean), scales)
-                } else {
-                    (s.unwrap_or(1.0), vec![1.0; n])
-                }
-            }
-            (None, Some(s)) => (s, vec![1.0; n]),
-            (None, None) => {
-                let big = x0.iter().fold(1.0f64, |a, v| a.max(v.abs()));
-                (0.5 * big, vec![1.0; n])
-            }
-        };
+        let (sigma0, scales) = start_spread(o, x0);
         let full = match o.metric {
             Metric::Full => true,
             Metric::Diagonal => false,
@@ -84,6 +74,7 @@ impl Adaptive {
             seeds: Vec::new(),
             stall: None,
             run_reference: None,
+            repeats: Repeats::default(),
         }
     }
 
@@ -118,6 +109,7 @@ impl Adaptive {
         if let Some(stall) = &self.stall {
             stall.check()?;
         }
+        self.repeats.check(n)?;
         if let Some(ys) = &self.asked {
             let Some(dist) = &self.dist else {
                 return len("adaptive search asked without a distribution", 0, 1);
@@ -153,6 +145,7 @@ impl Adaptive {
         }
         if self.dist.is_none() {
             self.run_reference = Some(ledger.best.fun);
+            self.repeats.begin(&ledger.best.x);
         }
         let dist = self.dist.get_or_insert_with(|| {
             let mut dist = SearchGaussian::new(
@@ -220,14 +213,24 @@ impl Adaptive {
         if ledger.evaluations >= ledger.budget || values.len() < dist.p.lambda {
             return Ok(end(Stop::Budget, dist.sigma));
         }
+        // A failed point (NaN or an infinity, under FailurePolicy::Continue) ranks below
+        // every finite value.
+        let ranked = if values.iter().all(|v| v.is_finite()) {
+            Cow::Borrowed(values)
+        } else {
+            Cow::Owned(values.iter().map(|&v| ranked_value(v)).collect())
+        };
         if let Some(stall) = &mut self.stall {
-            // Told values are finite (checked by `take`).
-            let smallest = values.iter().copied().fold(f64::INFINITY, f64::min);
+            let smallest = ranked.iter().copied().fold(f64::INFINITY, f64::min);
             if stall.observe(values.len(), smallest) {
                 return Ok(end(Stop::Stalled, dist.sigma));
             }
         }
-        let ended = dist.update(ys, values).is_some();
+        let run_end = if ranked.iter().all(|&v| v == f64::INFINITY) {
+            dist.failed_generation()
+        } else {
+            dist.update(ys, &ranked, ledger.best.fun)
+        };
         // A warm-up (diagonal metric: gaussian.rs's `Tpa`) that drew nothing better than the
         // best value seen before the run found the spread and nothing else: while sigma was
         // far too wide the mean drifted to points worse than the start (on the texture task at
@@ -239,10 +242,14 @@ impl Adaptive {
         }
         let sigma = dist.sigma;
         self.asked = None;
-        if ended {
+        if let Some(run_end) = run_end {
             let o = &ledger.options;
             if !o.restarts {
                 return Ok(end(Stop::Converged, sigma));
+            }
+            let reference = self.run_reference.unwrap_or(f64::INFINITY);
+            if self.repeats.judge(run_end, dist, reference, o.patience) {
+                return Ok(end(Stop::Done, sigma));
             }
             self.restarts += 1;
             self.lambda *= 2;
@@ -254,3 +261,54 @@ impl Adaptive {
         Ok(None)
     }
 }
+
+/// A told value as the search ranks it: a failed point (NaN or an infinity) below every
+/// finite value.
+fn ranked_value(v: f64) -> f64 {
+    if v.is_finite() {
+        v
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The start spread and the covariance's starting scales: [`crate::Minimizer::sigma0_each`]
+/// as given; else from the box's finite widths (an open coordinate gets the mean width's
+/// spread); else from `x0`.
+fn start_spread(o: &Options, x0: &[f64]) -> (f64, Vec<f64>) {
+    let n = x0.len();
+    if let Some(each) = &o.sigma0_each {
+        let mean = each.iter().sum::<f64>() / n as f64;
+        return (mean, each.iter().map(|s| s / mean).collect());
+    }
+    let from_x0 = || {
+        let big = x0.iter().fold(1.0f64, |a, v| a.max(v.abs()));
+        (o.sigma0.unwrap_or(0.5 * big), vec![1.0; n])
+    };
+    let Some((lo, hi)) = &o.bounds else {
+        return from_x0();
+    };
+    let widths: Vec<f64> = lo.iter().zip(hi).map(|(l, u)| u - l).collect();
+    let finite = widths.iter().filter(|w| w.is_finite());
+    let count = finite.clone().count();
+    if count == 0 {
+        return from_x0();
+    }
+    let mean = finite.sum::<f64>() / count as f64;
+    if mean > 0.0 {
+        let scale = |w: &f64| {
+            if w.is_finite() {
+                (w / mean).max(1e-12)
+            } else {
+                1.0
+            }
+        };
+        (
+            o.sigma0.unwrap_or(0.25 * mean),
+            widths.iter().map(scale).collect(),
+        )
+    } else {
+        (o.sigma0.unwrap_or(1.0), vec![1.0; n])
+    }
+}
+
