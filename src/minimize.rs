@@ -159,8 +159,9 @@ impl<F> Minimizer<F> {
         /// flat bottom below its own precision; "back at the best point" means its best value
         /// within that precision of the best seen before it, and its mean within a few of its
         /// standard deviations of that point. On an objective whose values tie (a staircase,
-        /// a quantised render), one more such restart is asked for: restarts there can end on
-        /// a step of the best value that is not the best step.
+        /// a quantised render, or values rounded at the optimum), two more such restarts are
+        /// asked for: restarts there can end on a step of the best value that is not the best
+        /// step, and restarts with larger populations still find lower ones.
         patience(restarts: usize) => options.patience = restarts;
 
         /// A box: every evaluated point is projected onto it, and restarts stay inside it; `x0`

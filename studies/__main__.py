@@ -37,6 +37,9 @@ STUDIES: dict[str, tuple[str, str]] = {
                          "docs/results/large-scale.md from the runs of large-scale"),
     "large-scale-seeds": ("studies.large_scale.seeds",
                           "minimize on bbob-largescale over seeds, at many evaluation counts"),
+    "stopping-bbob": ("studies.stopping.bbob",
+                      "minimize's stop rules on bbob: targets reached against evaluations spent "
+                      "(docs/results/stopping-bbob.md)"),
     "peers": ("studies.peers.peers",
               "pycma's BIPOP-CMA-ES and nevergrad's NGOpt on examples/compare's instances "
               "(scripts/compare-peers)"),

@@ -46,8 +46,9 @@ impl Repeats {
     }
 
     /// Judges a run that ended with `end`, `reference` the best value seen when it began:
-    /// whether `patience` runs in a row (one more on an objective whose values tie, where a
-    /// run can end on a step of the best value that is not the best step) converged at the
+    /// whether `patience` runs in a row (two more on an objective whose values tie, where a
+    /// run can end on a step of the best value that is not the best step, and restarts with
+    /// larger populations still find lower steps) converged at the
     /// same value, within the run's own precision, and at the same point, within a few of
     /// its standard deviations (or of the run's before it, which placed the point).
     pub(crate) fn judge(
@@ -81,6 +82,6 @@ impl Repeats {
             0
         };
         self.last_spread = Some(spread);
-        patience > 0 && self.found >= patience + usize::from(self.ties)
+        patience > 0 && self.found >= patience + 2 * usize::from(self.ties)
     }
 }
