@@ -248,7 +248,6 @@ impl Polished {
     }
 }
 
-
 /// Under [`FailurePolicy::Continue`], an estimate's values with its failed points (NaN or an
 /// infinity) left out: a failed point takes its antithetic partner's value (a pair shares
 /// its seed), so that the pair's difference, its whole share of the gradient, is zero; a

@@ -311,4 +311,3 @@ fn start_spread(o: &Options, x0: &[f64]) -> (f64, Vec<f64>) {
         (o.sigma0.unwrap_or(1.0), vec![1.0; n])
     }
 }
-
