@@ -1,5 +1,5 @@
 //! The adaptive search, written once, as a state machine between asks: runs of a Gaussian
-//! search distribution (`gaussian.rs`: its draws and its update) from the start or the best
+//! search distribution (`gaussian/`: its draws and its update) from the start or the best
 //! point seen, each restart with twice the population, until the budget is spent, the
 //! target reached, or (without restarts) a run converges. [`crate::Strategy::Adaptive`] of
 //! [`crate::AskTell`], and the polish after the paper's loop (`../polished.rs`).
@@ -231,7 +231,7 @@ impl Adaptive {
         } else {
             dist.update(ys, &ranked, ledger.best.fun)
         };
-        // A warm-up (diagonal metric: gaussian.rs's `Tpa`) that drew nothing better than the
+        // A warm-up (diagonal metric: gaussian/'s `Tpa`) that drew nothing better than the
         // best value seen before the run found the spread and nothing else: while sigma was
         // far too wide the mean drifted to points worse than the start (on the texture task at
         // n = 12,288 the run had not come back below the start within 10^4 evaluations:
