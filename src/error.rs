@@ -229,6 +229,30 @@ pub enum Error {
         /// The upper bound.
         upper: f64,
     },
+
+    /// A checkpoint file could not be read, written or understood
+    /// ([`crate::lifecycle::Checkpoint`]); the run it belongs to is not touched.
+    #[error("checkpoint {path}: {reason}")]
+    Checkpoint {
+        /// The file.
+        path: String,
+        /// What went wrong (the system's message, or what is damaged).
+        reason: String,
+    },
+
+    /// A checkpoint file belongs to another run: resuming from it would not continue this
+    /// one ([`crate::lifecycle::Checkpoint`]). `field` is the first setting that differs.
+    #[error("checkpoint {path} belongs to another run: {field} is {saved} there, {given} here")]
+    CheckpointMismatch {
+        /// The file.
+        path: String,
+        /// The first setting that differs (`x0`, `budget`, `seed`, `strategy`, ...).
+        field: String,
+        /// Its value in the file.
+        saved: String,
+        /// Its value in the run given.
+        given: String,
+    },
 }
 
 /// The value of an option in an [`Error::InvalidParameter`], kept as the kind of number the

@@ -51,6 +51,10 @@
 //!   [`Ask`] gives an iteration's points and one seed per point; `tell` takes their values
 //!   and takes the step. The callback forms are written on them: the same options and seed
 //!   give the same bits ([`NoObjective`] stands in for the objective a run does not need).
+//! - [`lifecycle`]: a run's lifecycle for every ask-and-tell method, written once: a
+//!   [`lifecycle::Driver`] (an interrupt, observers such as a progress line and a bounded
+//!   trace, workers bit-identical to one, a checkpoint to resume from) and
+//!   [`Minimizer::run_with`]; an error ends the run with its result so far.
 //! - `argmin` (feature `argmin`): the estimate as [argmin](https://argmin-rs.org)'s
 //!   `Gradient`, so that its steepest descent and L-BFGS run on plateau-ridden functions.
 //! - [`LeastSquares`]: for an objective that returns many numbers (a residual image): the
@@ -114,7 +118,9 @@ mod builder;
 // The parts of a run: the estimator (estimator/), Adam, the annealer. The methods, each
 // written once as an ask-and-tell state machine (method/: the paper's loop, the adaptive
 // search, the two in turn); the types a run takes and gives back (run/); the callback forms,
-// which drive the methods with an objective or an estimator (minimize.rs, optimize.rs).
+// which drive the methods with an objective or an estimator (minimize.rs, optimize.rs),
+// and the lifecycle every method's run goes through (lifecycle/: driver, interrupt,
+// observers, workers, checkpoint).
 // No module imports one that imports it back (scripts/module-cycles); the module map with
 // every file is in docs/design.md.
 mod adam;
@@ -127,6 +133,7 @@ mod error;
 mod estimator;
 mod hessian;
 pub mod kernel;
+pub mod lifecycle;
 mod method;
 mod minimize;
 mod names;

@@ -7,6 +7,7 @@
 use std::fmt;
 
 use crate::error::Error;
+use crate::lifecycle::{Driver, Failure};
 use crate::method::AskTell;
 use crate::objective::{NoObjective, Objective};
 use crate::run::{FailurePolicy, Metric, Minimum, Options, Strategy};
@@ -250,7 +251,9 @@ impl<F> Minimizer<F> {
 
 impl<F: Objective> Minimizer<F> {
     /// Runs from `x0`: [`Minimizer::ask_tell`], with every asked point evaluated by the
-    /// objective (one [`Objective::evaluate_batch`] call per ask).
+    /// objective (one [`Objective::evaluate_batch`] call per ask): a bare
+    /// [`Driver`] run. [`Minimizer::run_with`] adds an interrupt, observers, workers and a
+    /// checkpoint, and keeps the result so far on error.
     ///
     /// # Errors
     /// Bad options or start ([`Error::EmptyTheta`], [`Error::NonFiniteTheta`],
@@ -258,15 +261,43 @@ impl<F: Objective> Minimizer<F> {
     /// [`Error::OutsideBounds`]), or
     /// `f` returning NaN or an infinity ([`Error::NonFiniteValue`], with the point).
     pub fn run(&self, x0: &[f64]) -> Result<Minimum, Error> {
-        let mut run = self.ask_tell(x0)?;
-        let mut values = Vec::new();
-        while let Some(ask) = run.ask()? {
-            values.clear();
-            values.resize(ask.len(), 0.0);
-            self.objective
-                .evaluate_batch(ask.points(), ask.seeds(), &mut values);
-            run.tell(&values)?;
-        }
-        run.finish()
+        let run = self.ask_tell(x0)?;
+        let f = &self.objective;
+        Driver::new()
+            .run(run, |_, ask, out| {
+                f.evaluate_batch(ask.points(), ask.seeds(), out);
+                Ok::<(), Error>(())
+            })
+            .map_err(Error::from)
+    }
+}
+
+impl<F: Objective + Sync> Minimizer<F> {
+    /// Runs from `x0` with `driver`: its [`crate::lifecycle::Interrupt`] (the run ends with
+    /// [`Stop::Interrupted`] and the best point so far), observers, workers (bit-identical
+    /// to one) and checkpoint (feature `serde`). Without any, it is [`Minimizer::run`].
+    ///
+    /// ```
+    /// use plateau_free::lifecycle::{Driver, Trace};
+    /// use plateau_free::Minimizer;
+    ///
+    /// let f = |x: &[f64]| (x[0] - 1.0).powi(2) + (x[1] + 1.0).powi(2);
+    /// let m = Minimizer::new(f).budget(400).seed(5);
+    /// let mut trace = Trace::new(100);
+    /// let best = m.run_with(&[0.0, 0.0], Driver::new().workers(3).observe(&mut trace))?;
+    /// assert_eq!(best, m.run(&[0.0, 0.0])?);
+    /// assert_eq!(trace.rows().len(), best.iterations + 1);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`Minimizer::run`], and a checkpoint that cannot be read or written or belongs to
+    /// another run: a [`Failure`] with the result so far (`None` when the run did not begin).
+    pub fn run_with(&self, x0: &[f64], driver: Driver<'_>) -> Result<Minimum, Failure<Minimum>> {
+        let run = self.ask_tell(x0).map_err(|error| Failure {
+            error,
+            result: None,
+        })?;
+        driver.run_objective(run, &self.objective)
     }
 }

@@ -124,6 +124,14 @@ impl Method {
         }
     }
 
+    /// Iterations and restarts so far, and the spread of the next iteration.
+    fn progress(&self) -> (usize, usize, f64) {
+        match self {
+            Method::Adaptive(a) => a.progress(),
+            Method::Polished(p) => p.progress(),
+        }
+    }
+
     /// Whether a failed ask ends the run: a point of the adaptive search that overflows
     /// does (its draws are spent), the paper's loop draws the same points again.
     fn failed_ask_ends_run(&self) -> bool {
@@ -384,5 +392,66 @@ impl AskTell {
     /// The dimension of the points.
     pub fn dim(&self) -> usize {
         self.n
+    }
+
+    /// Iterations completed (generations of the adaptive search, gradient steps of the
+    /// paper's loop): [`Minimum::iterations`] as it stands.
+    ///
+    /// ```
+    /// let m = plateau_free::Minimizer::without_objective().budget(100).sigma0(0.5);
+    /// let mut run = m.ask_tell(&[1.0])?;
+    /// assert_eq!((run.iteration(), run.sigma()), (0, 0.5));
+    /// while let Some(ask) = run.ask()? {
+    ///     let values: Vec<f64> = ask.iter().map(|(x, _)| x[0].abs()).collect();
+    ///     run.tell(&values)?;
+    /// }
+    /// let best = run.result().unwrap();
+    /// assert_eq!((run.iteration(), run.sigma()), (best.iterations, best.sigma));
+    /// # Ok::<(), plateau_free::Error>(())
+    /// ```
+    pub fn iteration(&self) -> usize {
+        self.method.progress().0
+    }
+
+    /// The spread of the next iteration (the last one's once the run has ended).
+    pub fn sigma(&self) -> f64 {
+        match &self.result {
+            Some(result) => result.sigma,
+            None => self.method.progress().2,
+        }
+    }
+
+    /// The result as it stands: once the run has ended, its result; before, the best point
+    /// told so far with [`Stop::Interrupted`] (the start, with an infinite value, before
+    /// any value is told). What a run ended early (an interrupt, an error) gives back.
+    ///
+    /// ```
+    /// use plateau_free::{Minimizer, Stop};
+    ///
+    /// let mut run = Minimizer::without_objective().budget(100).ask_tell(&[2.0])?;
+    /// let ask = run.ask()?.unwrap();
+    /// let values: Vec<f64> = ask.iter().map(|(x, _)| x[0] * x[0]).collect();
+    /// run.tell(&values)?;
+    /// let so_far = run.so_far();
+    /// assert_eq!((so_far.fun, so_far.stop, so_far.evaluations), (4.0, Stop::Interrupted, 1));
+    /// # Ok::<(), plateau_free::Error>(())
+    /// ```
+    pub fn so_far(&self) -> Minimum {
+        if let Some(result) = &self.result {
+            return result.clone();
+        }
+        let (iterations, restarts, sigma) = self.method.progress();
+        self.ledger
+            .minimum(iterations, restarts, sigma, Stop::Interrupted)
+    }
+
+    /// The options the run was made with (for a checkpoint's identity).
+    pub(crate) fn options(&self) -> &Options {
+        &self.ledger.options
+    }
+
+    /// The start.
+    pub(crate) fn x0(&self) -> &[f64] {
+        &self.x0
     }
 }

@@ -97,6 +97,15 @@ impl Polished {
         }
     }
 
+    /// Iterations and restarts so far, and the spread of the next iteration.
+    pub(crate) fn progress(&self) -> (usize, usize, f64) {
+        match (&self.polish, &self.run) {
+            (Some(polish), _) => polish.progress(),
+            (None, Some(run)) => (run.iteration(), 0, run.sigma().unwrap_or(self.sigma)),
+            (None, None) => (0, 0, self.sigma),
+        }
+    }
+
     /// Whether the budget allows the loop an iteration.
     pub(crate) fn has_iterations(&self) -> bool {
         self.run.is_some()

@@ -45,6 +45,23 @@ impl<'a> Ask<'a> {
 }
 
 impl<'a> Ask<'a> {
+    /// An ask of `points` with their `seeds` (one a point), for a method of your own
+    /// ([`crate::lifecycle::AskAndTell`]).
+    ///
+    /// ```
+    /// let flat = [1.0, 2.0, 3.0, 4.0];
+    /// let ask = plateau_free::Ask::try_new(plateau_free::Points::new(&flat, 2), &[7, 7])?;
+    /// assert_eq!((ask.len(), ask.dim()), (2, 2));
+    /// # Ok::<(), plateau_free::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] unless there is one seed a point.
+    pub fn try_new(points: Points<'a>, seeds: &'a [u64]) -> Result<Ask<'a>, Error> {
+        crate::check::len("seeds (one a point)", seeds.len(), points.len())?;
+        Ok(Ask { points, seeds })
+    }
+
     /// An ask of `points`, with `seeds` (one a point).
     pub(crate) fn new(points: Points<'a>, seeds: &'a [u64]) -> Ask<'a> {
         Ask { points, seeds }

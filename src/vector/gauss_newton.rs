@@ -624,3 +624,10 @@ impl LeastSquaresAskTell {
 fn sum_of_squares(r: &[f64]) -> f64 {
     r.iter().map(|v| v * v).sum()
 }
+
+impl LeastSquaresAskTell {
+    /// The outputs of `r` told per point (the pattern's rows).
+    pub fn outputs(&self) -> usize {
+        self.opts.sparsity.outputs()
+    }
+}

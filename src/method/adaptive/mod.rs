@@ -139,6 +139,12 @@ impl Adaptive {
         self.sigma0
     }
 
+    /// Iterations and restarts so far, and the spread of the next generation.
+    pub(crate) fn progress(&self) -> (usize, usize, f64) {
+        let sigma = self.dist.as_ref().map_or(self.sigma0, |d| d.sigma);
+        (self.iterations, self.restarts, sigma)
+    }
+
     /// Draws the next generation: its points and their seeds.
     pub(crate) fn ask(&mut self, ledger: &Ledger) -> Result<Ask<'_>, Error> {
         let (n, o) = (self.start.len(), &ledger.options);
