@@ -201,8 +201,6 @@ pub fn loop_renders(
     Ok((1..=rows).map(|i| i * per).collect())
 }
 
-/// The marker with which the replay's loss leaves the search: asked for a value the
-
 #[cfg(test)]
 mod tests {
     use super::*;

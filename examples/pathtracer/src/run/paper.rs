@@ -80,14 +80,7 @@ where
             Ok(state) => state,
             Err(e) => {
                 // The state after the last good iteration is kept, to continue from.
-                let (history, snapshots, time) = recorder.parts();
-                run.saver.save(
-                    false,
-                    Progress::Loop { state: *e.state },
-                    history,
-                    snapshots,
-                    time,
-                );
+                recorder.save(run, false, *e.state);
                 return Err(e.error.into());
             }
         };
@@ -101,30 +94,12 @@ where
             }
             Some(Why::Checkpoint) => {
                 recorder.saved_at = (state.iteration, recorder.optimisation_time);
-                let (history, snapshots, time) = recorder.parts();
-                run.saver.save(
-                    false,
-                    Progress::Loop {
-                        state: state.clone(),
-                    },
-                    history,
-                    snapshots,
-                    time,
-                );
+                recorder.save(run, false, state.clone());
             }
         }
     }
     drop(estimator);
-    let (history, snapshots, time) = recorder.parts();
-    run.saver.save(
-        finished,
-        Progress::Loop {
-            state: state.clone(),
-        },
-        history,
-        snapshots,
-        time,
-    );
+    recorder.save(run, finished, state.clone());
     let (history, mut snapshots, optimisation_time) = recorder.finish();
     if interrupted {
         // The strip of an interrupted run ends where it stopped.
@@ -304,9 +279,12 @@ impl<'a> Recorder<'a> {
         (over_budget, checkpoint_due)
     }
 
-    /// The history, the snapshots and the optimisation time so far.
-    fn parts(&self) -> (&[Row], &[Vec<f64>], Duration) {
-        (&self.history, &self.snapshots, self.optimisation_time)
+    /// Writes the checkpoint of the loop at `state` with the record so far.
+    fn save(&self, run: &Run<'_>, finished: bool, state: OptimizerState) {
+        let progress = Progress::Loop { state };
+        let time = self.optimisation_time;
+        run.saver
+            .save(finished, progress, &self.history, &self.snapshots, time);
     }
 
     /// The history, the snapshots and the optimisation time.

@@ -54,7 +54,7 @@ pub fn replay(path: &Path, window: f64) -> Result<Replayed> {
     if !c.finished {
         return Err(format!("{}: the run did not finish", path.display()).into());
     }
-    if !c.history.last().is_some_and(|r| r.renders > 0) {
+    if c.history.last().is_none_or(|r| r.renders == 0) {
         let why = "its history has no renders (written before the runs counted; run it again)";
         return Err(format!("{}: {why}", path.display()).into());
     }
