@@ -175,7 +175,7 @@ fn page(dirs: &[PathBuf]) -> String {
         ));
         md.push_str(&report::markdown_table(&header, &rows));
     }
-    md.push_str("\nRenders to the paper's parameter MSE: the renders of the objective (every evaluation of the loss; not the evaluation-only renders of the image MSE, nor the reference) at the end of the first iteration whose parameter MSE (of the current point in the paper's loop, of the best point so far in the adaptive search and the polish) is at or below the paper's; \"stays\": the renders at the end of the first iteration from which every later one is at or below it (a loop whose current point swings through the target and out again reaches it early and stays late). The median is over every seed run, a run that never reached it counted as never (so the median is \"never\" when fewer than half reached it); the range runs from the fewest renders to the most, \"never\" included. They come from each run's `history.csv` (its `renders` column) or, for runs written before the runs counted, are derived from the run's `checkpoint.json` without rendering: the paper's loop spends the same number of renders every iteration, and the adaptive search is replayed from the checkpoint's values, the replay checked to ask for the very points the run asked for (`pathtracer::run::recount`). A run is \"not countable\" when its history has no renders and neither derivation holds: no checkpoint, or a search that this build does not replay to the same points (the search changed since the run); such runs must be made again to be counted (the command prints why for each).\n");
+    md.push_str("\nRenders to the paper's parameter MSE: the renders of the objective (every evaluation of the loss; not the evaluation-only renders of the image MSE, nor the reference) at the end of the first iteration whose parameter MSE (of the current point in the paper's loop, of the best point so far in the adaptive search and the polish) is at or below the paper's; \"stays\": the renders at the end of the first iteration from which every later one is at or below it (a loop whose current point swings through the target and out again reaches it early and stays late). The median is over every seed run, a run that never reached it counted as never (so the median is \"never\" when fewer than half reached it); the range runs from the fewest renders to the most, \"never\" included. They come from each run's `history.csv` (its `renders` column) or, for the paper's loop written before the runs counted, from its summary: the loop spends the same number of renders every iteration. A search whose history has no renders is \"not countable\"; such runs must be made again to be counted (the command prints why for each).\n");
     md.push_str("\nSeconds per iteration are wall-clock on a shared 2-core machine: an iteration of the adaptive search and of the polish is a generation (several renders), of the paper's loop one estimate (N renders); compare them only within a column.\n");
     md
 }
@@ -208,9 +208,9 @@ impl Reach {
 }
 
 /// When the run in `dir` reached the paper's parameter MSE for `task`, from its
-/// `history.csv`, else derived: for the paper's loop from its summary
-/// ([`run::loop_renders`]), for the adaptive search and the polish from its checkpoint
-/// ([`run::recount`]); why not, if none of these can tell.
+/// `history.csv`, else, for the paper's loop, derived from its summary
+/// ([`run::loop_renders`]); why not, if neither can tell (a search written before the runs
+/// counted: made again, it counts).
 fn renders_to_paper(
     dir: &Path,
     task: &tasks::Task,
@@ -220,24 +220,28 @@ fn renders_to_paper(
         return Ok(Reach::NEVER);
     };
     let history = dir.join("history.csv");
-    let reach = |rows: Vec<(f64, usize)>| Reach::of(&rows, paper);
     let (rows, counted) =
         read_history(&history).ok_or_else(|| format!("{} cannot be read", history.display()))?;
-    if let Some(renders) = counted {
-        return Ok(reach(rows.into_iter().zip(renders).collect()));
-    }
-    let why = |e: String| format!("{}: {e}", dir.display());
-    if matches!(
-        summary.method,
-        run::Method::Plateau | run::Method::Fd | run::Method::Spsa
-    ) {
-        let renders =
-            run::loop_renders(rows.len(), summary.evaluations, summary.iterations).map_err(why)?;
-        return Ok(reach(rows.into_iter().zip(renders).collect()));
-    }
-    let rows = run::recount(&dir.join(run::checkpoint::FILE)).map_err(|e| why(e.to_string()))?;
-    Ok(reach(
-        rows.iter().map(|r| (r.param_mse, r.renders)).collect(),
+    let renders = match counted {
+        Some(renders) => renders,
+        None if matches!(
+            summary.method,
+            run::Method::Plateau | run::Method::Fd | run::Method::Spsa
+        ) =>
+        {
+            run::loop_renders(rows.len(), summary.evaluations, summary.iterations)
+                .map_err(|e| format!("{}: {e}", dir.display()))?
+        }
+        None => {
+            return Err(format!(
+                "{}: no renders column (a search written before the runs counted; run it again)",
+                history.display()
+            ))
+        }
+    };
+    Ok(Reach::of(
+        &rows.into_iter().zip(renders).collect::<Vec<_>>(),
+        paper,
     ))
 }
 

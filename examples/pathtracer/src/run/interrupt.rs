@@ -1,30 +1,40 @@
-//! Ctrl-C: the first SIGINT asks the running loop to stop after its current iteration (it
-//! then writes its checkpoint and outputs); a second one exits at once with code 130.
+//! Ctrl-C: the first SIGINT triggers the library's [`Interrupt`], and the running loop stops
+//! after its current iteration (it then writes its checkpoint and outputs); a second one
+//! exits at once with code 130.
 //!
-//! The flag is process-wide and set only by the handler the command line installs
-//! ([`install_handler`]); library callers and tests stop a run with
+//! The interrupt is process-wide and triggered only by the handler the command line
+//! installs ([`install_handler`]); library callers and tests stop a run with
 //! [`super::Control::stop_after`] instead.
 
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::LazyLock;
+
+use plateau_free::lifecycle::Interrupt;
 
 /// The exit code of a process stopped by SIGINT (128 + 2), by shell convention.
 pub const EXIT_CODE: i32 = 130;
 
-static REQUESTED: AtomicBool = AtomicBool::new(false);
+/// The process's interrupt, which Ctrl-C triggers.
+static CTRL_C: LazyLock<Interrupt> = LazyLock::new(Interrupt::new);
+
+/// The interrupt that Ctrl-C triggers (a clone: they share one flag).
+pub fn ctrl_c() -> Interrupt {
+    CTRL_C.clone()
+}
 
 /// Whether Ctrl-C has been pressed (once).
 pub fn requested() -> bool {
-    REQUESTED.load(Ordering::SeqCst)
+    CTRL_C.is_triggered()
 }
 
-/// Installs the SIGINT handler: the first signal sets the flag and says on stderr what
+/// Installs the SIGINT handler: the first signal triggers [`ctrl_c`] and says on stderr what
 /// happens next; the second exits at once with [`EXIT_CODE`] (the files already written stay
 /// whole: every checkpoint is replaced atomically). Installing twice is harmless.
 pub fn install_handler() {
     static COUNT: AtomicUsize = AtomicUsize::new(0);
     let _ = ctrlc::set_handler(|| {
         if COUNT.fetch_add(1, Ordering::SeqCst) == 0 {
-            REQUESTED.store(true, Ordering::SeqCst);
+            CTRL_C.trigger();
             eprintln!(
                 "\ninterrupted: finishing the current iteration, then writing the checkpoint and the outputs (Ctrl-C again to quit at once)"
             );

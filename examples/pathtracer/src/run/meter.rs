@@ -16,8 +16,8 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// Seconds between two plain progress lines.
-pub const LINE_SECONDS: f64 = 5.0;
+/// Seconds between two plain progress lines: the library's [`plateau_free::lifecycle::ProgressLine`] spacing.
+pub const LINE_SECONDS: f64 = plateau_free::lifecycle::PROGRESS_SECONDS;
 
 /// The environment variable that sets the seconds between two plain progress lines.
 pub const LINE_SECONDS_VAR: &str = "PATHTRACER_PROGRESS_SECONDS";

@@ -6,7 +6,8 @@
 //! the library's adaptive search (and polished loop) in `adaptive.rs`, the image method in
 //! `image.rs`. What a run can be told is in `settings.rs`, what it yields in `outcome.rs`,
 //! the files it writes in `outputs.rs`, its progress display in `meter.rs`, the time-budget
-//! planner in `budget.rs`, what an earlier run left in `earlier.rs`.
+//! planner in `budget.rs`, what an earlier run left in `earlier.rs`, the stop rule replayed on
+//! a finished run in `stall_replay.rs`, Ctrl-C in `interrupt.rs`.
 
 mod adaptive;
 mod budget;
@@ -18,7 +19,6 @@ mod meter;
 mod outcome;
 mod outputs;
 mod paper;
-mod recount;
 mod settings;
 mod stall_replay;
 
@@ -30,9 +30,8 @@ pub use budget::{plan_for_budget, plan_with_render_time};
 pub use checkpoint::{Build, Checkpoint, CheckpointError, Every, Progress};
 pub use earlier::Earlier;
 pub use meter::{LINE_SECONDS, LINE_SECONDS_VAR};
-pub use outcome::{renders_to, write_history, Outcome, Row, Summary};
+pub use outcome::{loop_renders, renders_to, write_history, Outcome, Row, Summary};
 pub use paper::optimizer;
-pub use recount::{loop_renders, recount};
 pub use settings::{
     eval_every, Crn, Method, Settings, CURVE_POINTS, MAX_SAMPLES, MAX_SCALE, POLISH, POLISH_BEFORE,
 };

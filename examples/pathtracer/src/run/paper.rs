@@ -12,7 +12,7 @@ use plateau_free::{
 
 use super::adaptive;
 use super::meter::{At, Meter, Unit};
-use super::{Checkpoint, Ended, Method, Progress, Row, Run, Settings};
+use super::{Checkpoint, Ended, Every, Method, Progress, Row, Run, Settings};
 use crate::render::Image;
 use crate::report::Result;
 use crate::tasks::Task;
@@ -39,7 +39,14 @@ where
     let (task, s, ctl) = (run.task, run.s, run.ctl);
     let mut estimator = estimator(s, loss)?;
     let mut optimizer = optimizer(task, s)?;
-    let mut recorder = Recorder::new(task, s, run.reference, run.start, ctl.progress, renders);
+    let mut recorder = Recorder::new(
+        task,
+        s,
+        run.reference,
+        run.start,
+        (ctl.progress, ctl.every),
+        renders,
+    );
     let (mut state, mut finished) = match &ctl.resume {
         Some(c) => {
             let Progress::Loop { state } = &c.progress else {
@@ -52,11 +59,6 @@ where
     };
     let mut interrupted = false;
     while !finished {
-        let done = state.iteration;
-        recorder.checkpoint_at = ctl
-            .every
-            .next_after(done, recorder.seconds_per_iteration())
-            .map(|k| done + k);
         recorder.restart_clock();
         let segment = optimizer.minimize_from(&mut *estimator, state, |step| {
             let (over_budget, checkpoint_due) = recorder.observe(step);
@@ -78,14 +80,7 @@ where
             Ok(state) => state,
             Err(e) => {
                 // The state after the last good iteration is kept, to continue from.
-                let (history, snapshots, time) = recorder.parts();
-                run.saver.save(
-                    false,
-                    Progress::Loop { state: *e.state },
-                    history,
-                    snapshots,
-                    time,
-                );
+                recorder.save(run, false, *e.state);
                 return Err(e.error.into());
             }
         };
@@ -98,30 +93,13 @@ where
                 break;
             }
             Some(Why::Checkpoint) => {
-                let (history, snapshots, time) = recorder.parts();
-                run.saver.save(
-                    false,
-                    Progress::Loop {
-                        state: state.clone(),
-                    },
-                    history,
-                    snapshots,
-                    time,
-                );
+                recorder.saved_at = (state.iteration, recorder.optimisation_time);
+                recorder.save(run, false, state.clone());
             }
         }
     }
     drop(estimator);
-    let (history, snapshots, time) = recorder.parts();
-    run.saver.save(
-        finished,
-        Progress::Loop {
-            state: state.clone(),
-        },
-        history,
-        snapshots,
-        time,
-    );
+    recorder.save(run, finished, state.clone());
     let (history, mut snapshots, optimisation_time) = recorder.finish();
     if interrupted {
         // The strip of an interrupted run ends where it stopped.
@@ -201,8 +179,10 @@ struct Recorder<'a> {
     optimisation_time: Duration,
     last: Instant,
     bar: Meter,
-    /// The iteration count at which the next checkpoint is due.
-    checkpoint_at: Option<usize>,
+    /// The iterations and the optimisation time at the last checkpoint.
+    saved_at: (usize, Duration),
+    /// When a checkpoint is due.
+    every: Every,
     /// Why the observer last stopped the loop.
     why: Option<Why>,
     /// The loss's count of its renders.
@@ -215,7 +195,7 @@ impl<'a> Recorder<'a> {
         s: &'a Settings,
         reference: &'a Image,
         start: &[f64],
-        show_progress: bool,
+        (show_progress, every): (bool, Every),
         renders: &'a Cell<usize>,
     ) -> Self {
         Recorder {
@@ -233,7 +213,8 @@ impl<'a> Recorder<'a> {
             optimisation_time: Duration::ZERO,
             bar: Meter::new(task.name(), s.iterations, Unit::Iterations, show_progress),
             last: Instant::now(),
-            checkpoint_at: None,
+            saved_at: (0, Duration::ZERO),
+            every,
             why: None,
             renders,
         }
@@ -245,16 +226,12 @@ impl<'a> Recorder<'a> {
         self.snapshots.clone_from(&c.snapshots);
         self.optimisation_time = Duration::from_secs_f64(c.optimisation_seconds);
         self.bar.set_position(c.history.len());
+        self.saved_at = (c.history.len(), self.optimisation_time);
     }
 
     /// Starts timing again (after a checkpoint was written: its time is not the run's).
     fn restart_clock(&mut self) {
         self.last = Instant::now();
-    }
-
-    /// The optimisation time per iteration so far, seconds.
-    fn seconds_per_iteration(&self) -> f64 {
-        self.optimisation_time.as_secs_f64() / self.history.len().max(1) as f64
     }
 
     /// The loop's observer: records `step`; says whether the budget is spent and whether a
@@ -294,14 +271,20 @@ impl<'a> Recorder<'a> {
             ),
         );
         let over_budget = s.budget_seconds.is_some_and(|b| seconds >= b);
-        let checkpoint_due = self.checkpoint_at.is_some_and(|k| step.iteration + 1 >= k);
+        let checkpoint_due = self.every.is_due(
+            (step.iteration + 1).saturating_sub(self.saved_at.0),
+            self.optimisation_time.saturating_sub(self.saved_at.1),
+        );
         self.last = Instant::now();
         (over_budget, checkpoint_due)
     }
 
-    /// The history, the snapshots and the optimisation time so far.
-    fn parts(&self) -> (&[Row], &[Vec<f64>], Duration) {
-        (&self.history, &self.snapshots, self.optimisation_time)
+    /// Writes the checkpoint of the loop at `state` with the record so far.
+    fn save(&self, run: &Run<'_>, finished: bool, state: OptimizerState) {
+        let progress = Progress::Loop { state };
+        let time = self.optimisation_time;
+        run.saver
+            .save(finished, progress, &self.history, &self.snapshots, time);
     }
 
     /// The history, the snapshots and the optimisation time.

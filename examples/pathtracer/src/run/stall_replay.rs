@@ -3,8 +3,8 @@
 //! parameter error there against at its end.
 //!
 //! The rule sees what the library sees: each iteration's batch of values (from the
-//! checkpoint's log of every value, cut into the history's batches by its `renders` column,
-//! derived by [`super::recount`] for runs written before the runs counted) and the smallest
+//! checkpoint's log of every value, cut into the history's batches by its `renders` column)
+//! and the smallest
 //! of them, fed to the library's own [`Stall`] as [`plateau_free::Minimizer`] feeds it: the
 //! adaptive search from its first generation, the polish from the hand-over (the paper's loop
 //! is not judged: its schedule spans its share of the budget). So a run made with the rule
@@ -14,7 +14,7 @@ use std::path::Path;
 
 use plateau_free::Stall;
 
-use super::{adaptive, recount, Checkpoint, Method, Progress, Row};
+use super::{adaptive, Checkpoint, Method, Progress, Row};
 use crate::report::Result;
 
 /// A full-length run and where the rule would have stopped it.
@@ -46,19 +46,19 @@ pub struct Replayed {
 /// run whose checkpoint is `path`.
 ///
 /// # Errors
-/// A checkpoint that cannot be read, of an unfinished run, or whose renders cannot be
-/// derived ([`recount`]).
+/// A checkpoint that cannot be read, of an unfinished run, or of a run that did not count
+/// its renders (written before the runs counted: made again, it counts).
 pub fn replay(path: &Path, window: f64) -> Result<Replayed> {
     let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let c = Checkpoint::parse_any_build(&bytes, path)?;
     if !c.finished {
         return Err(format!("{}: the run did not finish", path.display()).into());
     }
-    let rows = if c.history.last().is_some_and(|r| r.renders > 0) {
-        c.history.clone()
-    } else {
-        recount(path)?
-    };
+    if c.history.last().is_none_or(|r| r.renders == 0) {
+        let why = "its history has no renders (written before the runs counted; run it again)";
+        return Err(format!("{}: {why}", path.display()).into());
+    }
+    let rows = c.history.clone();
     let s = &c.settings;
     let budget = s.samples.saturating_mul(s.iterations);
     let last = rows.last().ok_or("a run without iterations")?;

@@ -81,6 +81,7 @@ impl Checkpoint {
                 state.theta.len()
             }
             Progress::Adaptive {
+                state,
                 values,
                 best_point,
                 bests,
@@ -92,6 +93,17 @@ impl Checkpoint {
                         "{} evaluations for a budget of {}",
                         values.len(),
                         s.samples.saturating_mul(s.iterations)
+                    ));
+                }
+                let search: plateau_free::AskTell = serde_json::from_value(state.clone())
+                    .map_err(|e| format!("the search's state: {e}"))?;
+                if search.evaluations() != values.len() || search.dim() != best_point.len() {
+                    return Err(format!(
+                        "the search's state has {} evaluations in {} dimensions, the record {} in {}",
+                        search.evaluations(),
+                        search.dim(),
+                        values.len(),
+                        best_point.len()
                     ));
                 }
                 if values.is_empty() != (done == 0) {

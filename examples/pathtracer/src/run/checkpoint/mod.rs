@@ -6,9 +6,9 @@
 //! uses (they differ only when `--budget` planned them), the loop's state (theta, Adam's
 //! moments, the iteration, hence the annealer's sigma, the estimator's stream position,
 //! hence every random stream), the history so far, the progress strip's snapshots and the
-//! times spent. For `--method adaptive`, instead of the loop's state, the value of every
-//! evaluation so far (the library's `Minimizer` keeps its state inside; a resumed run replays
-//! it from these values, without rendering, and checks that it asked for the same points).
+//! times spent. For `--method adaptive` and `polished`, instead of the loop's state, the
+//! library's ask-and-tell run (`plateau_free::AskTell`, serialised), read back on resume, and
+//! the value of every evaluation so far (for the stop rule's study).
 //!
 //! Why the executable's hash: a run continued by another build could differ in any bit (a
 //! changed renderer, estimator or compiler), and nothing short of the binary itself says
@@ -17,24 +17,23 @@
 //!
 //! One file per job: `cadence.rs` (when a run writes it), `build.rs` (the build that wrote
 //! it), `error.rs` (why one is refused), `checks.rs` (whether its parts fit together and fit
-//! the run asked for), `file.rs` (the atomic write); this file holds the contents, reading
-//! and writing.
+//! the run asked for); this file holds the contents, reading and writing (atomically, with
+//! the library's `replace_file`).
 
 mod build;
 mod cadence;
 mod checks;
 mod error;
-mod file;
 
 pub use build::{executable_hash, fnv1a, one_line, Build, ONE_LINE_MAX};
 pub use cadence::{Every, SECONDS_BETWEEN};
 pub use error::CheckpointError;
-pub use file::replace_file;
 
 use std::fs;
-use std::io::{self, Write};
+use std::io;
 use std::path::Path;
 
+use plateau_free::lifecycle::replace_file;
 use plateau_free::OptimizerState;
 use serde::{Deserialize, Serialize};
 
@@ -55,13 +54,13 @@ pub enum Progress {
         /// Theta, Adam's moments, the iteration, the stream position, the loop's history.
         state: OptimizerState,
     },
-    /// The adaptive search: every evaluation so far, to replay.
+    /// The adaptive search (and the polished loop): the library's run, and every value.
     Adaptive {
+        /// The library's `plateau_free::AskTell`, serialised: its options, state and random
+        /// generators.
+        state: serde_json::Value,
         /// The values of the evaluations, in the order the search asked for them.
         values: Vec<f64>,
-        /// FNV-1a of the bits of every point evaluated, in order: a replay that asks for
-        /// other points has diverged and is stopped.
-        points_hash: u64,
         /// The best value so far (`None` before the first finite one).
         best_value: Option<f64>,
         /// The best point so far.
@@ -167,7 +166,7 @@ impl Checkpoint {
     /// `path`, if any, is then as before.
     pub fn save(&self, path: &Path) -> io::Result<()> {
         let bytes = serde_json::to_vec(self).map_err(io::Error::other)?;
-        replace_file(path, |file| file.write_all(&bytes))
+        replace_file(path, &bytes)
     }
 }
 
