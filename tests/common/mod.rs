@@ -4,6 +4,8 @@
 //! would warn in the others.
 #![allow(dead_code)]
 
+pub mod ask_tell;
+
 use std::fmt::Debug;
 
 use plateau_free::{GradientEstimator, Objective, PlateauFreeGradient};
