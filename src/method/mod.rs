@@ -14,7 +14,7 @@
 //! and evaluates with the objective until the run ends; [`Optimizer::minimize_from`]
 //! (`optimize.rs`) drives the paper's loop one estimate at a time with any
 //! [`crate::GradientEstimator`]. With the same options and seed both forms give the same
-//! bits (`tests/ask_tell.rs`).
+//! bits (`tests/ask_tell.rs`, `tests/ask_tell_pinned.rs`).
 //!
 //! Each ask gives the points (rows of `n`) and one seed per point: the seeds the
 //! [`crate::Seeded`] and [`crate::Batch`] forms of the objective receive. Each tell takes

@@ -5,6 +5,7 @@
 #![allow(dead_code)]
 
 pub mod ask_tell;
+pub mod fuzz;
 
 use std::fmt::Debug;
 
