@@ -18,8 +18,8 @@
 //! `2P + 1` evaluations. It is exact in expectation for every `f`, a plateau included: for the
 //! step `1[x > 0]`, `Q_sigma(x) = Phi(x / sigma)` and the estimate converges to its second
 //! derivative `-x / sigma^3 phi(x / sigma)` (`tests/hessian.rs`). Storage is `n^2`.
-//! Not used by [`crate::minimize`] this session (see `docs/convergence.md`); a building block for
-//! Newton or trust-region steps on the smoothed objective.
+//! No method of [`crate::minimize`] uses it yet (see `docs/convergence.md`); it is a building
+//! block for Newton or trust-region steps on the smoothed objective.
 
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};

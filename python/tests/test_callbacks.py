@@ -1,4 +1,4 @@
-"""Issue 29: callbacks as scipy's (a true value returned or StopIteration raised stops the run,
+"""Callbacks as scipy's (a true value returned or StopIteration raised stops the run,
 and the result comes back), and ``success``/``status`` with scipy's meaning."""
 
 import numpy as np
@@ -36,7 +36,7 @@ class Recorder:
 @pytest.mark.parametrize("method", sorted(METHODS))
 @pytest.mark.parametrize("answer", [True, np.True_, 1, "stop", [0]], ids=repr)
 def test_a_true_value_returned_stops_the_run(method, answer):
-    # Issue 29: np.True_ and 1 did not stop the run.
+    # Any true value stops the run, numpy's np.True_ and 1 included, as in scipy.
     callback = Recorder(3, answer)
     result = plateau_free.minimize(staircase, X0, method=method, callback=callback, seed=1, **METHODS[method])
     assert result.nit == 3 and len(callback.seen) == 3
@@ -56,7 +56,7 @@ def test_a_false_value_goes_on(method, answer):
 @pytest.mark.parametrize("method", sorted(METHODS))
 @pytest.mark.parametrize("raised", [StopIteration, StopIteration("enough")], ids=repr)
 def test_stop_iteration_ends_the_run_and_returns_the_result(method, raised):
-    # Issue 29: StopIteration (scipy's way to stop) escaped, and the result was lost.
+    # StopIteration is scipy's way to stop: it ends the run, and the result is returned.
     callback = Recorder(4, raised)
     result = plateau_free.minimize(staircase, X0, method=method, callback=callback, seed=2, **METHODS[method])
     assert result.nit == 4 and len(callback.seen) == 4
@@ -99,7 +99,7 @@ def test_other_exceptions_of_the_callback_come_out_unchanged():
 
 
 def test_success_and_status_follow_scipy():
-    # Issue 29: success was always True, also when the budget ran out far from any minimum.
+    # success is False when the budget runs out far from any minimum, as in scipy.
     spent = plateau_free.minimize(lambda x: float(np.sum(x**2)), np.full(5, 3.0), budget=60)
     assert not spent.success and spent.status == 1
     assert spent.message == "budget spent: 60 of at most 60 evaluations; x is the best point seen"

@@ -140,7 +140,8 @@ def test_other_settings_are_refused_naming_the_difference(
 
 
 def test_a_finished_checkpoint_is_not_reused_for_another_fun(tmp_path: Path) -> None:
-    # Issue 29: the old run's x came back for another objective, with nothing saying so.
+    # A checkpoint belongs to its objective: a finished run's x must not come back for
+    # another fun, silently.
     path = tmp_path / "run.json"
     first = plateau_free.minimize(staircase, np.zeros(3), method="plateau", checkpoint=path, **OPTIONS)
     assert not first.from_checkpoint and "checkpoint" not in first.message

@@ -1,4 +1,4 @@
-"""Issue 29: one default method, chosen by ``method=`` alone, and every bad option a ValueError
+"""One default method, chosen by ``method=`` alone, and every bad option a ValueError
 that names the option and shows its value as written."""
 
 import math
@@ -14,8 +14,8 @@ X0 = [0.0, 0.0, 0.0]
 
 
 def test_minimize_with_nothing_else_runs_the_adaptive_search_at_its_default_budget():
-    # Issue 29: minimize(f, x0) ran the paper's loop (801 evaluations whatever n); on a 50-D
-    # staircase it ended at 90 where the adaptive search reaches 0.
+    # minimize(f, x0) with no method runs the adaptive search at its default budget (1000
+    # evaluations per coordinate), which reaches 0 on a 50-D staircase.
     calls = [0]
 
     def counted(x):
@@ -67,7 +67,7 @@ FOREIGN = [
 @pytest.mark.parametrize("method, name", FOREIGN)
 def test_an_option_of_another_method_is_a_value_error_naming_it(method, name):
     canonical = {None: "adaptive", "paper": "plateau"}.get(method, method)
-    # Issue 29: samples=4 beside budget silently switched to the paper's loop.
+    # An option of another method is an error: it never silently switches the method.
     value = VALUES[name]
     named = re.escape(f"{name} = {value!r}: not an option of method='{canonical}'")
     options = {"budget": 100, name: value}

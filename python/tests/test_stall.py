@@ -1,7 +1,7 @@
-"""Issue 25 item 2: the stop rule ``plateau_free::Stall`` as ``stop_when_stalled`` of
+"""The stop rule ``plateau_free::Stall`` as ``stop_when_stalled`` of
 :func:`plateau_free.minimize` and :func:`plateau_free.ask_tell` (methods 'adaptive' and
 'polished'): a run whose best value stops improving ends one window after its last
-improvement, a run still improving spends its budget, and the default is the old run."""
+improvement, a run still improving spends its budget, and the default runs as without the rule."""
 
 import math
 
