@@ -56,6 +56,8 @@ def test_torch_adam_reaches_the_target_box():
 
 
 @needs_mitsuba
-def test_mitsuba_shadow_finds_the_target_in_200_renders():
-    out = run("mitsuba_shadow.py", "200")
+def test_mitsuba_shadow_finds_the_target_in_its_default_400_renders():
+    # The example asserts the target's very image (loss 0.0); with 200 renders the search
+    # ends a few thousandths away.
+    out = run("mitsuba_shadow.py")
     assert "start: loss" in out and re.search(r"after \d+ renders", out), out
