@@ -1,6 +1,18 @@
 """What the property-based tests (``test_properties_*.py``) share: their Hypothesis settings,
 the strategies drawing inputs of every shape, dtype and size, the check of a result or an
-expected error, and the objectives."""
+expected error, and the objectives.
+
+The contract, for ``PlateauFreeGradient``, ``FiniteDifference`` and ``Spsa`` (``.estimate``),
+``minimize`` (every method), ``ask_tell`` (ask, tell, result), ``Annealer`` and ``Adam``:
+either a valid result -- finite float64 numbers, shaped as given -- or a ValueError or
+TypeError with a message (``OptionTypeError`` is both), or the objective's own exception,
+unchanged. Never a panic (``pyo3_runtime.PanicException``), a crashed interpreter, a hang or a
+silent non-finite result; and inputs that are plainly valid give a result.
+
+Deterministic: ``derandomize=True`` and no example database. A complex number is refused or
+(numpy's casts) at least warned about; the properties run with numpy's ComplexWarning as an
+error, so that no complex value passes silently.
+"""
 
 import math
 
