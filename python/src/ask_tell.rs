@@ -115,6 +115,25 @@ struct Saved {
     shape: Vec<usize>,
 }
 
+impl PyAskTell {
+    /// The adaptive search this object holds, as a run of its own for the library's driver
+    /// (a bit-exact copy through its serde state), and the shape of `x0`; a ValueError for
+    /// the paper's loop.
+    pub(crate) fn take_adaptive(&self, py: Python<'_>) -> PyResult<(RsAskTell, Vec<usize>)> {
+        let held = self.run.lock(py)?;
+        let Run::Adaptive(run) = &*held else {
+            return Err(PyValueError::new_err(
+                "_drive runs the adaptive search only",
+            ));
+        };
+        let state = serde_json::to_string(run)
+            .map_err(|e| PyValueError::new_err(format!("cannot copy the run: {e}")))?;
+        let copy = serde_json::from_str(&state)
+            .map_err(|e| PyValueError::new_err(format!("cannot copy the run: {e}")))?;
+        Ok((copy, self.shape.clone()))
+    }
+}
+
 #[pymethods]
 impl PyAskTell {
     /// The run as a JSON string (the library's serde state, no objective): pickled, and read

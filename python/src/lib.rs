@@ -38,6 +38,7 @@ use pyo3::types::{PyBool, PyBytes, PyDict, PyFloat, PyInt, PyString, PyTuple, Py
 mod adaptive;
 mod ask_tell;
 mod convert;
+mod drive;
 mod estimators;
 mod least_squares;
 mod locking;
@@ -106,5 +107,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
         plateau_free::lifecycle::PROGRESS_SECONDS,
     )?;
     m.add_function(wrap_pyfunction!(_replace_file, m)?)?;
+    m.add_function(wrap_pyfunction!(drive::_drive, m)?)?;
     Ok(())
 }
