@@ -2,6 +2,7 @@
 re-exported by ``plateau_free`` (whose own modules, ``__init__.py``, ``_minimize.py``, ..., are
 typed inline)."""
 
+import os
 from typing import Any, Callable, Literal, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
@@ -186,6 +187,7 @@ __all__ = [
     "STALL_WINDOW",
     "Spsa",
     "_AskTell",
+    "_drive",
     "_minimize",
     "_replace_file",
     "_rust_reference_estimates",
@@ -306,4 +308,14 @@ def _rust_reference_minimize_adaptive(
     polish: float | None = None,
 ) -> dict[str, Any]: ...
 def _replace_file(path: str, data: bytes) -> None: ...
+def _drive(
+    run: _AskTell,
+    evaluate: Callable[[Any, Any], Any],
+    *,
+    disp: bool = False,
+    keep: int = 1_000_000,
+    checkpoint: Union[str, "os.PathLike[str]", None] = None,
+    checkpoint_every: Optional[int] = None,
+    callback: Optional[Callable[[int, int, float, float], Any]] = None,
+) -> Tuple[dict[str, Any], Optional[str], list[Tuple[int, int, float, float]]]: ...
 def _rust_seconds_per_evaluation(dim: int = 10, samples: int = 10000, repeats: int = 5) -> float: ...
