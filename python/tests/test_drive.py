@@ -39,7 +39,7 @@ def driven(method: str, **settings: Any) -> tuple[dict[str, Any], Any, list[Any]
 def test_driven_equals_minimize(method: str) -> None:
     alone = plateau_free.minimize(staircase, np.zeros(3), method=method, **OPTIONS)
     raw, why, rows = driven(method, keep=8)
-    assert why is None and raw["stop"] == "Done"
+    assert why is None and raw["stop"] in ("Done", "Budget")
     assert raw["x"].tobytes() == alone.x.tobytes()
     assert (raw["fun"], raw["nfev"], raw["nit"]) == (alone.fun, alone.nfev, alone.nit)
     assert 8 <= len(rows) <= 17 and rows[-1][:2] == (raw["nit"], raw["nfev"])
