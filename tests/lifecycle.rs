@@ -233,6 +233,23 @@ fn the_progress_line_writes_lines() {
         )
         .unwrap();
     assert_eq!(String::from_utf8(out).unwrap().lines().count(), 2);
+    // Failed evaluations are counted on the line.
+    let mut out = Vec::new();
+    let holes = |x: &[f64]| if x[0] > 0.3 { f64::NAN } else { rosenbrock(x) };
+    let best = Minimizer::new(holes)
+        .budget(300)
+        .run_with(
+            &[0.0, 0.0],
+            Driver::new().observe(ProgressLine::new(&mut out)),
+        )
+        .unwrap();
+    assert!(best.failures > 0);
+    let text = String::from_utf8(out).unwrap();
+    let end = text.lines().last().unwrap();
+    assert!(
+        end.ends_with(&format!("  failed {}", best.failures)),
+        "{text}"
+    );
 }
 
 /// A method of one point an ask for `iterations` iterations: long runs, cheaply.
@@ -502,8 +519,26 @@ mod checkpoints {
             message.contains("budget is 500 there, 600 here"),
             "{message}"
         );
+        // A state changed after it was written, still valid JSON: refused by its checksum.
+        m.run_with(
+            &x0,
+            Driver::new().checkpoint(Checkpoint::new(path.with_extension("ok"))),
+        )
+        .unwrap();
+        let text = std::fs::read_to_string(path.with_extension("ok")).unwrap();
+        let at = text.find("\"evaluations\":").unwrap() + "\"evaluations\":".len();
+        let damaged = format!("{}1{}", &text[..at], &text[at..]);
+        std::fs::write(&path, damaged).unwrap();
+        let failure = m
+            .run_with(&x0, Driver::new().checkpoint(Checkpoint::new(&path)))
+            .unwrap_err();
+        assert!(
+            failure.error.to_string().contains("checksum"),
+            "{}",
+            failure.error
+        );
         // A damaged file.
-        std::fs::write(&path, b"{\"format\":1,\"version\"").unwrap();
+        std::fs::write(&path, b"{\"format\":2,\"version\"").unwrap();
         let failure = m
             .run_with(&x0, Driver::new().checkpoint(Checkpoint::new(&path)))
             .unwrap_err();

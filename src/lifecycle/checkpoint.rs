@@ -13,7 +13,7 @@ use crate::error::Error;
 pub const CHECKPOINT_SECONDS: f64 = 30.0;
 
 /// The version of the file's layout.
-const FORMAT: u32 = 1;
+const FORMAT: u32 = 2;
 
 /// The file's first line: what the state that follows belongs to.
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -21,6 +21,17 @@ struct Header {
     format: u32,
     version: String,
     identity: Vec<(String, String)>,
+    /// The state's checksum ([`checksum`]): a file damaged after it was written is refused,
+    /// never resumed with a state that is valid JSON but not the run's.
+    checksum: String,
+}
+
+/// FNV-1a over `bytes`, in hex: enough to tell a damaged state from the one written.
+fn checksum(bytes: &[u8]) -> String {
+    let hash = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    format!("{hash:016x}")
 }
 
 /// When a checkpoint is due.
@@ -138,16 +149,16 @@ impl Checkpoint {
         self.resumed
     }
 
-    /// The run held by the file, checked against the `fresh` run's settings; `None` when
-    /// the file does not exist.
+    /// Restores `run` (a fresh run) from the file, after checking the file's settings
+    /// against the run's; `false` when the file does not exist (`run` unchanged).
     ///
     /// # Errors
     /// [`Error::Checkpoint`] for a file that cannot be read or is damaged, or of another
     /// format or library version; [`Error::CheckpointMismatch`] for another run's file.
-    pub fn read<M: AskAndTell>(&self, fresh: &M) -> Result<Option<M>, Error> {
+    pub fn read<M: AskAndTell>(&self, run: &mut M) -> Result<bool, Error> {
         let bytes = match std::fs::read(&self.path) {
             Ok(bytes) => bytes,
-            Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
+            Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(false),
             Err(e) => return Err(self.error(format!("cannot be read: {e}"))),
         };
         let cut = bytes
@@ -168,10 +179,13 @@ impl Checkpoint {
             );
             return Err(self.error(why));
         }
-        self.compare(&header.identity, &fresh.identity())?;
+        self.compare(&header.identity, &run.identity())?;
         let state = bytes.get(cut + 1..).unwrap_or_default();
-        M::load(state)
-            .map(Some)
+        if checksum(state) != header.checksum {
+            return Err(self.error("damaged: the state does not match its checksum".into()));
+        }
+        run.restore(state)
+            .map(|()| true)
             .map_err(|e| self.error(inner_reason(e)))
     }
 
@@ -197,6 +211,10 @@ impl Checkpoint {
     /// [`Error::Checkpoint`] when the state or the file cannot be written (the file is then
     /// as before).
     pub fn save<M: AskAndTell>(&mut self, method: &M) -> Result<(), Error> {
+        let mut state = Vec::new();
+        method
+            .save(&mut state)
+            .map_err(|e| self.error(inner_reason(e)))?;
         let identity = self
             .identity
             .get_or_insert_with(|| owned(method.identity()));
@@ -204,12 +222,11 @@ impl Checkpoint {
             format: FORMAT,
             version: env!("CARGO_PKG_VERSION").into(),
             identity: identity.clone(),
+            checksum: checksum(&state),
         };
         let mut bytes = serde_json::to_vec(&header).map_err(|e| self.error(e.to_string()))?;
         bytes.push(b'\n');
-        method
-            .save(&mut bytes)
-            .map_err(|e| self.error(inner_reason(e)))?;
+        bytes.extend_from_slice(&state);
         replace_file(&self.path, &bytes).map_err(|e| self.error(format!("not written: {e}")))?;
         self.last_save = Instant::now();
         self.last_iteration = method.iteration();
@@ -224,9 +241,8 @@ impl Checkpoint {
             return Err(self.error("this method's state cannot be saved".into()));
         }
         self.identity = Some(owned(identity));
-        let saved = self.read(&fresh)?;
-        self.resumed = saved.is_some();
-        let run = saved.unwrap_or(fresh);
+        let mut run = fresh;
+        self.resumed = self.read(&mut run)?;
         self.last_iteration = run.iteration();
         Ok(run)
     }

@@ -343,5 +343,6 @@ fn progress<M: AskAndTell>(method: &M, started: Instant) -> Progress {
         best: method.best_value(),
         sigma: method.sigma(),
         elapsed: started.elapsed(),
+        failures: method.failures(),
     }
 }

@@ -95,17 +95,22 @@ pub trait AskAndTell {
         Err(unsaved())
     }
 
-    /// A run read back from [`AskAndTell::save`]'s bytes.
+    /// Replaces this run's state with the one [`AskAndTell::save`] wrote into `bytes`. The
+    /// run given is the fresh one of the same settings, so a method that wraps another can
+    /// keep what is not state (a handle, a callback) and restore the rest.
     ///
     /// # Errors
     /// [`Error::Checkpoint`] for bytes that are not such a state, or for a method that
-    /// cannot be saved (the default).
-    fn load(bytes: &[u8]) -> Result<Self, Error>
-    where
-        Self: Sized,
-    {
+    /// cannot be saved (the default); the run is then unchanged.
+    fn restore(&mut self, bytes: &[u8]) -> Result<(), Error> {
         let _ = bytes;
         Err(unsaved())
+    }
+
+    /// Evaluations whose value was a failure (NaN, an infinity, an error the method counts),
+    /// for the progress shown; 0 for a method that counts none.
+    fn failures(&self) -> usize {
+        0
     }
 }
 
@@ -145,11 +150,12 @@ macro_rules! saved_as_json {
             })
         }
 
-        fn load(bytes: &[u8]) -> Result<Self, Error> {
-            serde_json::from_slice(bytes).map_err(|e| Error::Checkpoint {
+        fn restore(&mut self, bytes: &[u8]) -> Result<(), Error> {
+            *self = serde_json::from_slice(bytes).map_err(|e| Error::Checkpoint {
                 path: String::new(),
                 reason: format!("damaged state: {e}"),
-            })
+            })?;
+            Ok(())
         }
     };
 }
@@ -183,6 +189,10 @@ impl AskAndTell for AskTell {
 
     fn best_value(&self) -> f64 {
         self.best().map_or(f64::INFINITY, |(_, v)| v)
+    }
+
+    fn failures(&self) -> usize {
+        AskTell::failures(self)
     }
 
     fn finish(self) -> Result<Minimum, Error> {
@@ -309,6 +319,10 @@ impl AskAndTell for LeastSquaresAskTell {
 
     fn best_value(&self) -> f64 {
         self.fun()
+    }
+
+    fn failures(&self) -> usize {
+        LeastSquaresAskTell::failures(self)
     }
 
     fn finish(self) -> Result<VectorMinimum, Error> {

@@ -40,6 +40,8 @@ pub struct Progress {
     pub sigma: f64,
     /// Time since the run began (since this driver's run began, for a resumed run).
     pub elapsed: Duration,
+    /// Evaluations that failed so far ([`crate::lifecycle::AskAndTell::failures`]).
+    pub failures: usize,
 }
 
 /// Shown every iteration of a [`crate::lifecycle::Driver`]'s run. To stop the run from an
@@ -138,9 +140,13 @@ impl<W: Write> ProgressLine<W> {
 
     fn write(&mut self, prefix: &str, p: &Progress) {
         let budget = p.budget.map(|b| format!("/{b}")).unwrap_or_default();
+        let failed = match p.failures {
+            0 => String::new(),
+            n => format!("  failed {n}"),
+        };
         let _ = writeln!(
             self.out,
-            "{prefix}iteration {}  evaluations {}{budget}  best {:.3e}  sigma {:.3e}  elapsed {:.1} s",
+            "{prefix}iteration {}  evaluations {}{budget}  best {:.3e}  sigma {:.3e}  elapsed {:.1} s{failed}",
             p.iteration,
             p.evaluations,
             p.best,

@@ -390,6 +390,11 @@ impl AskTell {
         self.ledger.budget
     }
 
+    /// Evaluations told whose value was NaN or infinite ([`Minimum::failures`] so far).
+    pub fn failures(&self) -> usize {
+        self.ledger.failures
+    }
+
     /// The dimension of the points.
     pub fn dim(&self) -> usize {
         self.n

@@ -611,6 +611,11 @@ impl LeastSquaresAskTell {
         self.nfev
     }
 
+    /// Evaluations told whose outputs were not all finite.
+    pub fn failures(&self) -> usize {
+        self.failures
+    }
+
     /// The current point (the last step taken).
     pub fn theta(&self) -> &[f64] {
         &self.theta
