@@ -93,7 +93,20 @@ impl Trace {
         self.seen
     }
 
-    fn push(&mut self, row: TraceRow) {
+    /// Records `row`, the next iteration's, as [`Observer::observe`] does: for a method
+    /// wrapped in one of your own that keeps its history in its saved state.
+    ///
+    /// ```
+    /// use plateau_free::lifecycle::{Trace, TraceRow};
+    ///
+    /// let mut trace = Trace::new(2);
+    /// for k in 0..9 {
+    ///     trace.record(TraceRow { iteration: k, evaluations: 10 * k, best: 1.0 / (k + 1) as f64, sigma: 0.5 });
+    /// }
+    /// let kept: Vec<usize> = trace.rows().iter().map(|r| r.iteration).collect();
+    /// assert_eq!((kept, trace.stride()), (vec![0, 4, 8], 4));
+    /// ```
+    pub fn record(&mut self, row: TraceRow) {
         let index = self.seen;
         self.seen += 1;
         if index % self.stride != 0 {
@@ -126,7 +139,7 @@ impl Default for Trace {
 
 impl Observer for Trace {
     fn observe(&mut self, p: &Progress) {
-        self.push(TraceRow {
+        self.record(TraceRow {
             iteration: p.iteration,
             evaluations: p.evaluations,
             best: p.best,
