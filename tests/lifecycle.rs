@@ -455,6 +455,36 @@ mod checkpoints {
     }
 
     #[test]
+    fn an_error_inside_an_evaluation_leaves_the_last_turn_to_resume_from() {
+        // The evaluation of turn 30 fails (Ctrl-C inside an evaluation, an error): the file
+        // holds the end of turn 29, written although no timer was due, and the resumed run
+        // redoes turn 30 and is the run left alone.
+        let x0 = [-1.2, 1.0, 0.5];
+        let m = Minimizer::new(rosenbrock as Plain).budget(2000).seed(5);
+        let alone = m.run(&x0).unwrap();
+        let path = path("inside.json");
+        let mut turn = 0;
+        let failure = Driver::new()
+            .checkpoint(Checkpoint::new(&path))
+            .run(m.ask_tell(&x0).unwrap(), |w, ask, out| {
+                turn += 1;
+                if turn == 30 {
+                    return Err(Error::Unfinished {
+                        evaluations: 0,
+                        budget: 0,
+                    });
+                }
+                w.evaluate(&(rosenbrock as Plain), ask, out)
+            })
+            .unwrap_err();
+        assert!(matches!(failure.error, Error::Unfinished { .. }));
+        let resumed = m
+            .run_with(&x0, Driver::new().checkpoint(Checkpoint::new(&path)))
+            .unwrap();
+        assert_eq!(resumed, alone);
+    }
+
+    #[test]
     fn the_paper_loop_resumes_bit_for_bit() {
         let f = |x: &[f64]| rosenbrock(x);
         let opt = || Optimizer::new(Adam::new(0.02).unwrap(), Annealer::paper(0.4, 300).unwrap());

@@ -91,6 +91,8 @@ pub struct Checkpoint {
     last_save: Instant,
     last_iteration: usize,
     resumed: bool,
+    /// The state at the end of the last turn and its iteration ([`Checkpoint::remember`]).
+    remembered: Option<(Vec<u8>, usize)>,
 }
 
 impl fmt::Debug for Checkpoint {
@@ -113,6 +115,7 @@ impl Checkpoint {
             last_save: Instant::now(),
             last_iteration: 0,
             resumed: false,
+            remembered: None,
         }
     }
 
@@ -211,25 +214,41 @@ impl Checkpoint {
     /// [`Error::Checkpoint`] when the state or the file cannot be written (the file is then
     /// as before).
     pub fn save<M: AskAndTell>(&mut self, method: &M) -> Result<(), Error> {
+        self.remember(method)?;
+        self.write_remembered()
+    }
+
+    /// Keeps `method`'s state in memory (after a turn): what the file gets when it is due,
+    /// and when the next turn fails halfway (an error or Ctrl-C inside an evaluation), so
+    /// that the file always holds a whole turn's end.
+    pub(crate) fn remember<M: AskAndTell>(&mut self, method: &M) -> Result<(), Error> {
         let mut state = Vec::new();
         method
             .save(&mut state)
             .map_err(|e| self.error(inner_reason(e)))?;
-        let identity = self
-            .identity
+        self.identity
             .get_or_insert_with(|| owned(method.identity()));
+        self.remembered = Some((state, method.iteration()));
+        Ok(())
+    }
+
+    /// Writes the state [`Checkpoint::remember`] kept, if any, atomically.
+    pub(crate) fn write_remembered(&mut self) -> Result<(), Error> {
+        let (Some((state, iteration)), Some(identity)) = (&self.remembered, &self.identity) else {
+            return Ok(());
+        };
         let header = Header {
             format: FORMAT,
             version: env!("CARGO_PKG_VERSION").into(),
             identity: identity.clone(),
-            checksum: checksum(&state),
+            checksum: checksum(state),
         };
         let mut bytes = serde_json::to_vec(&header).map_err(|e| self.error(e.to_string()))?;
         bytes.push(b'\n');
-        bytes.extend_from_slice(&state);
+        bytes.extend_from_slice(state);
         replace_file(&self.path, &bytes).map_err(|e| self.error(format!("not written: {e}")))?;
         self.last_save = Instant::now();
-        self.last_iteration = method.iteration();
+        self.last_iteration = *iteration;
         Ok(())
     }
 
@@ -244,6 +263,7 @@ impl Checkpoint {
         let mut run = fresh;
         self.resumed = self.read(&mut run)?;
         self.last_iteration = run.iteration();
+        self.remember(&run)?;
         Ok(run)
     }
 

@@ -273,14 +273,19 @@ impl<'a> Driver<'a> {
     }
 
     /// Shows the observers the end of a run that failed and gives its result so far. The
-    /// checkpoint is not written: the method may hold points waiting for values, and the
-    /// last checkpoint written (at the end of a turn) stays the one to resume from.
+    /// checkpoint gets the state of the last turn's end (the method may hold points waiting
+    /// for values): resumed, the run redoes the failed turn. A failure to write it is not
+    /// reported over the error that ended the run.
     fn fail<M: AskAndTell, E>(
         &mut self,
         method: &M,
         started: Instant,
         error: E,
     ) -> Failure<M::Output, E> {
+        #[cfg(feature = "serde")]
+        if let Some(checkpoint) = &mut self.checkpoint {
+            let _ = checkpoint.write_remembered();
+        }
         let progress = progress(method, started);
         for observer in &mut self.observers {
             observer.end(&progress);
@@ -311,12 +316,13 @@ impl<'a> Driver<'a> {
         Ok(fresh)
     }
 
-    /// Writes the checkpoint if one is set and due.
+    /// Keeps the turn's end in the checkpoint, if one is set, and writes it if due.
     fn save_when_due<M: AskAndTell>(&mut self, method: &M) -> Result<(), Error> {
         #[cfg(feature = "serde")]
         if let Some(checkpoint) = &mut self.checkpoint {
+            checkpoint.remember(method)?;
             if checkpoint.due(method.iteration()) {
-                return checkpoint.save(method);
+                return checkpoint.write_remembered();
             }
         }
         let _ = method;
