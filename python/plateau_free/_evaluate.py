@@ -103,7 +103,8 @@ def _batch_values(values: Any, count: int) -> _FloatArray:
 class _Evaluator:
     """``fun`` on a run's points, as :func:`minimize`'s options say: ``args``, ``batched``,
     ``seeded``, ``workers`` and ``on_failure``. Counts the failures (:attr:`failures`) and
-    keeps the first exception (:attr:`first_error`)."""
+    keeps the first exception (:attr:`first_error`, and its repr :attr:`first_error_text`,
+    which a checkpoint keeps)."""
 
     def __init__(
         self,
@@ -123,6 +124,7 @@ class _Evaluator:
         self.failures = 0
         self.exceptions = 0
         self.first_error: Optional[Exception] = None
+        self.first_error_text: Optional[str] = None
         self._pool: Optional[ThreadPoolExecutor] = None
         self._map: Optional[Callable[..., Any]] = None
         if isinstance(workers, int) and workers > 1:
@@ -179,3 +181,4 @@ class _Evaluator:
         self.exceptions += points
         if self.first_error is None:
             self.first_error = error
+            self.first_error_text = repr(error)

@@ -19,7 +19,7 @@ from ._native import FiniteDifference, Spsa
 from ._checks import _show
 from ._options import Options, _check_call, _options_doc, _PaperOptions
 from ._result import OptimizeResult, _paper_result, _wants_intermediate_result
-from ._saved import _Checkpoint, _settings
+from ._saved import _jsonable, _setting_pairs, _settings
 from ._types import _FloatArray
 
 if TYPE_CHECKING:
@@ -45,10 +45,9 @@ def minimize(
     if chosen in ("fd", "spsa"):
         return _minimize_baseline(fun, x0_array, chosen, checked)
     run, budget, extra = _native_run(chosen, x0_array, checked)
-    path = checked.get("checkpoint")
-    checkpoint = None
-    if path is not None:
-        checkpoint = _Checkpoint(path, _settings(fun, x0_array, chosen, checked, extra))
+    settings = None
+    if checked.get("checkpoint") is not None:
+        settings = _setting_pairs(_settings(fun, x0_array, chosen, checked, extra))
     callback = _Callback(checked["callback"]) if "callback" in checked else None
     workers = checked.get("workers", 1)
     if checked.get("parallel") and workers == 1:
@@ -61,7 +60,7 @@ def minimize(
         workers=workers,
         on_failure=checked["on_failure"],
     )
-    return _drive(run, evaluate, chosen, checked, budget, callback, checkpoint, x0_array)
+    return _drive(run, evaluate, chosen, checked, budget, callback, settings, x0_array)
 
 
 _MINIMIZE_DOC = """Minimise ``fun`` from ``x0``: ``minimize(fun, x0)`` is the first thing to try.
@@ -214,7 +213,7 @@ def _minimize_baseline(
     settings = None
     if path is not None:
         extra = {"iterations": iterations, "schedule": repr(annealer)}
-        settings = json.dumps(_Checkpoint(path, _settings(fun, x0, method, checked, extra)).settings)
+        settings = json.dumps(_jsonable(_settings(fun, x0, method, checked, extra)))
     callback = _Callback(checked["callback"]) if "callback" in checked else None
     raw = _native._minimize(
         estimator,

@@ -1,22 +1,16 @@
-"""The checkpoint file of a :func:`minimize` run (``checkpoint=path``): what the run is (its
-settings, compared key by key on resume), its ask-and-tell state (the library's serde state),
-the driver's progress and the points asked but not yet told; written atomically, read back
-only whole and only for the same run."""
+"""What a :func:`minimize` run's checkpoint (``checkpoint=path``) must match to be resumed: its
+settings (``fun``'s name, the method, ``x0`` and its shape, the options given), by name. The
+file itself is the library's (``lifecycle::Checkpoint``), compared in this order, sorted by
+name."""
 
 from __future__ import annotations
 
 import functools
-import hashlib
 import json
 import math
-from typing import Any, Callable, Optional
+from typing import Any, Callable
 
 import numpy as np
-
-from . import _native
-
-# The version of the file's layout.
-_FORMAT = 2
 
 
 def _identity(fun: Any) -> str:
@@ -50,72 +44,6 @@ def _compact(value: Any) -> str:
     return json.dumps(value, separators=(",", ":"))
 
 
-def _checksum(payload: dict[str, Any]) -> str:
-    return hashlib.sha256(_compact(payload).encode()).hexdigest()
-
-
-class _Checkpoint:
-    """Where a run keeps its checkpoint and with which settings; :meth:`load` reads it,
-    :meth:`save` writes it."""
-
-    def __init__(self, path: str, settings: dict[str, Any]) -> None:
-        self.path = path
-        self.settings = _jsonable(settings)
-
-    def _damaged(self, why: str) -> ValueError:
-        return ValueError(f"checkpoint {self.path} is damaged: {why}")
-
-    def load(self) -> Optional[dict[str, Any]]:
-        """The saved payload (``state``, ``progress``, ``pending``), or None without a file: a
-        damaged file, or one of other settings, is a ValueError naming the path and the
-        difference (never half-used)."""
-        try:
-            with open(self.path, "rb") as file:
-                data = file.read()
-        except FileNotFoundError:
-            return None
-        except OSError as e:
-            raise ValueError(f"checkpoint {self.path} cannot be read: {e}") from e
-        try:
-            saved = json.loads(data)
-            layout = saved["format"]
-        except (ValueError, TypeError, KeyError) as e:
-            raise self._damaged(f"not a checkpoint file ({e})") from e
-        if layout != _FORMAT:
-            raise ValueError(
-                f"checkpoint {self.path} has format {layout}, this version reads {_FORMAT}"
-            )
-        if saved.get("version") != _native.__version__:
-            raise ValueError(
-                f"checkpoint {self.path} was written by plateau-free {saved.get('version')}, "
-                f"this is {_native.__version__}"
-            )
-        found = saved.get("settings", {})
-        for key in sorted(self.settings):
-            old, here = found.get(key), self.settings[key]
-            if old != here:
-                raise ValueError(
-                    f"checkpoint: {key} is {_compact(old)} in {self.path}, {_compact(here)} here"
-                )
-        payload = saved.get("payload")
-        if not isinstance(payload, dict) or saved.get("checksum") != _checksum(payload):
-            raise self._damaged("its contents do not match their checksum")
-        return payload
-
-    def save(self, payload: dict[str, Any]) -> None:
-        """Replaces the file atomically (the library's ``replace_file``)."""
-        text = _compact(
-            {
-                "format": _FORMAT,
-                "version": _native.__version__,
-                "settings": self.settings,
-                "checksum": _checksum(payload),
-                "payload": payload,
-            }
-        )
-        _native._replace_file(self.path, text.encode())
-
-
 # The options that do not change what a run computes: left out of the settings a resumed run
 # must share.
 _NOT_IDENTITY = ("callback", "checkpoint", "checkpoint_every", "disp", "workers", "args")
@@ -137,3 +65,9 @@ def _settings(
         fun=_identity(fun), method=method, x0=x0.ravel().tolist(), shape=list(x0.shape), **extra
     )
     return settings
+
+
+def _setting_pairs(settings: dict[str, Any]) -> list[tuple[str, str]]:
+    """``settings`` as the checkpoint's identity: ``(name, compact JSON)``, sorted by name."""
+    jsonable = _jsonable(settings)
+    return [(key, _compact(jsonable[key])) for key in sorted(jsonable)]

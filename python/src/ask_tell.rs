@@ -3,7 +3,8 @@
 //! asked points wherever it likes and tells their values back.
 
 use super::*;
-use plateau_free::{AskTell as RsAskTell, PaperAskTell};
+use plateau_free::lifecycle::AskAndTell;
+use plateau_free::{Ask, AskTell as RsAskTell, PaperAskTell, Points};
 
 /// The run behind `plateau_free.AskTell`: `plateau_free::Minimizer`'s adaptive search, or the paper's
 /// loop as `plateau_free.minimize(method='plateau')` runs it (its final evaluation included).
@@ -20,14 +21,14 @@ pub(crate) struct PyAskTell {
 }
 
 #[derive(serde::Serialize, serde::Deserialize)]
-enum Run {
+pub(crate) enum Run {
     Adaptive(Box<RsAskTell>),
     Paper(Box<Paper>),
 }
 
 /// The paper's loop, its per-iteration records and its final evaluation.
 #[derive(serde::Serialize, serde::Deserialize)]
-struct Paper {
+pub(crate) struct Paper {
     run: PaperAskTell,
     seed: u64,
     record_x: bool,
@@ -38,52 +39,56 @@ struct Paper {
     /// Whether the final evaluation is asked and awaits its value.
     final_asked: bool,
     final_value: Option<f64>,
+    /// The final evaluation's point and seed while it is asked (what its `Ask` borrows).
+    #[serde(default)]
+    final_point: Vec<f64>,
+    #[serde(default)]
+    final_seed: [u64; 1],
 }
 
 impl Paper {
-    fn ask(&mut self) -> PyResult<Option<(Vec<f64>, Vec<u64>)>> {
+    /// The next points: the loop's, then the final evaluation (the last iterate with the
+    /// run's seed, as `plateau_free.minimize`), then None.
+    fn ask_points(&mut self) -> Result<Option<Ask<'_>>, Error> {
         if self.final_asked {
-            return Err(value_error(Error::AskPending));
+            return Err(Error::AskPending);
         }
-        let asked = self
-            .run
-            .ask()
-            .map_err(value_error)?
-            .map(|a| (a.points().as_flat().to_vec(), a.seeds().to_vec()));
-        if asked.is_some() || !self.final_evaluation || self.final_value.is_some() {
-            return Ok(asked);
+        if !self.run.is_done() {
+            return self.run.ask();
         }
-        // As `plateau_free.minimize`: `fun` once more at the last iterate, with the run's seed.
+        if !self.final_evaluation || self.final_value.is_some() {
+            return Ok(None);
+        }
         self.final_asked = true;
-        Ok(Some((self.run.theta().to_vec(), vec![self.seed])))
+        self.final_point = self.run.theta().to_vec();
+        self.final_seed = [self.seed];
+        let points = Points::new(&self.final_point, self.final_point.len());
+        Ask::try_new(points, &self.final_seed).map(Some)
     }
 
-    fn tell(&mut self, values: &[f64]) -> PyResult<()> {
+    fn tell(&mut self, values: &[f64]) -> Result<(), Error> {
         if self.final_asked {
             if values.len() != 1 {
-                return Err(value_error(Error::TellCount {
+                return Err(Error::TellCount {
                     expected: 1,
                     got: values.len(),
-                }));
+                });
             }
             // `result.fun` is this value: a NaN or an infinity is refused under every
             // failure policy (there is no other point to rank it against).
             if !values[0].is_finite() {
-                let error = Error::NonFiniteValue {
+                return Err(Error::NonFiniteValue {
                     sample: self.run.history().evaluations,
                     value: values[0],
                     point: self.run.theta().to_vec(),
-                };
-                return Err(PyValueError::new_err(format!(
-                    "{error}: tell finite values (the final evaluation must be finite)"
-                )));
+                });
             }
             self.final_value = Some(values[0]);
             self.final_asked = false;
             return Ok(());
         }
         let before = self.run.iteration();
-        self.run.tell(values).map_err(value_error)?;
+        self.run.tell(values)?;
         if self.run.iteration() == before {
             return Ok(()); // a redraw: the iteration is not done
         }
@@ -108,6 +113,80 @@ impl Paper {
     }
 }
 
+impl Run {
+    /// The next points and their seeds; None once the run has ended.
+    pub(crate) fn ask_points(&mut self) -> Result<Option<Ask<'_>>, Error> {
+        match self {
+            Run::Adaptive(run) => run.ask(),
+            Run::Paper(p) => p.ask_points(),
+        }
+    }
+
+    /// The values of the asked points, in their order.
+    pub(crate) fn tell_values(&mut self, values: &[f64]) -> Result<(), Error> {
+        match self {
+            Run::Adaptive(run) => run.tell(values),
+            Run::Paper(p) => p.tell(values),
+        }
+    }
+
+    /// Evaluations told so far (the paper loop's final one included).
+    pub(crate) fn evaluations(&self) -> usize {
+        match self {
+            Run::Adaptive(run) => run.evaluations(),
+            Run::Paper(p) => p.run.history().evaluations + usize::from(p.final_value.is_some()),
+        }
+    }
+
+    /// Iterations completed: generations, or the paper loop's steps.
+    pub(crate) fn iteration(&self) -> usize {
+        match self {
+            Run::Adaptive(run) => run.iteration(),
+            Run::Paper(p) => p.run.iteration(),
+        }
+    }
+
+    /// The spread now: the adaptive search's, the paper loop's last step's (NaN before).
+    pub(crate) fn sigma(&self) -> f64 {
+        match self {
+            Run::Adaptive(run) => run.sigma(),
+            Run::Paper(p) => p.run.history().sigma.last().copied().unwrap_or(f64::NAN),
+        }
+    }
+
+    /// The best value so far (the paper loop: its last estimate's mean value).
+    pub(crate) fn best_value(&self) -> f64 {
+        match self {
+            Run::Adaptive(run) => AskAndTell::best_value(&**run),
+            Run::Paper(p) => p.run.last_estimate().map_or(f64::INFINITY, |e| e.mean_value),
+        }
+    }
+
+    /// The budget of evaluations (the adaptive search's).
+    pub(crate) fn budget(&self) -> Option<usize> {
+        match self {
+            Run::Adaptive(run) => Some(run.budget()),
+            Run::Paper(_) => None,
+        }
+    }
+
+    /// The library's settings of the run, for a checkpoint's identity.
+    pub(crate) fn identity(&self) -> Vec<(&'static str, String)> {
+        match self {
+            Run::Adaptive(run) => AskAndTell::identity(&**run),
+            Run::Paper(p) => AskAndTell::identity(&p.run),
+        }
+    }
+
+    /// Whether the run has ended.
+    pub(crate) fn is_done(&self) -> bool {
+        match self {
+            Run::Adaptive(run) => run.is_done(),
+            Run::Paper(p) => p.is_done(),
+        }
+    }
+}
+
 /// What pickling keeps: the run (the library's serde state) and the shape of `x0`.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Saved {
@@ -116,22 +195,24 @@ struct Saved {
 }
 
 impl PyAskTell {
-    /// The adaptive search this object holds, as a run of its own for the library's driver
-    /// (a bit-exact copy through its serde state), and the shape of `x0`; a ValueError for
-    /// the paper's loop.
-    pub(crate) fn take_adaptive(&self, py: Python<'_>) -> PyResult<(RsAskTell, Vec<usize>)> {
+    /// A copy of the run this object holds (bit for bit, through its serde state), for the
+    /// library's driver, and the shape of `x0`.
+    pub(crate) fn copy_run(&self, py: Python<'_>) -> PyResult<(Run, Vec<usize>)> {
         let held = self.run.lock(py)?;
-        let Run::Adaptive(run) = &*held else {
-            return Err(PyValueError::new_err(
-                "_drive runs the adaptive search only",
-            ));
-        };
-        let state = serde_json::to_string(run)
-            .map_err(|e| PyValueError::new_err(format!("cannot copy the run: {e}")))?;
-        let copy = serde_json::from_str(&state)
-            .map_err(|e| PyValueError::new_err(format!("cannot copy the run: {e}")))?;
-        Ok((copy, self.shape.clone()))
+        Ok((copy_of(&held)?, self.shape.clone()))
     }
+
+    /// Replaces the run this object holds (with the driven run's end).
+    pub(crate) fn put_run(&self, py: Python<'_>, run: Run) -> PyResult<()> {
+        *self.run.lock(py)? = run;
+        Ok(())
+    }
+}
+
+/// A bit-exact copy of `run`, through its serde state.
+pub(crate) fn copy_of(run: &Run) -> PyResult<Run> {
+    let fail = |e: serde_json::Error| PyValueError::new_err(format!("cannot copy the run: {e}"));
+    serde_json::from_str(&serde_json::to_string(run).map_err(fail)?).map_err(fail)
 }
 
 #[pymethods]
@@ -231,6 +312,8 @@ impl PyAskTell {
                 record: Record::default(),
                 final_asked: false,
                 final_value: None,
+                final_point: Vec::new(),
+                final_seed: [seed],
             }))),
             shape,
         })
@@ -243,13 +326,12 @@ impl PyAskTell {
         &self,
         py: Python<'py>,
     ) -> PyResult<Option<(Bound<'py, PyAny>, Bound<'py, PyArray1<u64>>)>> {
-        let asked = match &mut *self.run.lock(py)? {
-            Run::Adaptive(run) => run
-                .ask()
-                .map_err(value_error)?
-                .map(|a| (a.points().as_flat().to_vec(), a.seeds().to_vec())),
-            Run::Paper(p) => p.ask()?,
-        };
+        let asked = self
+            .run
+            .lock(py)?
+            .ask_points()
+            .map_err(value_error)?
+            .map(|a| (a.points().as_flat().to_vec(), a.seeds().to_vec()));
         let Some((points, seeds)) = asked else {
             return Ok(None);
         };
@@ -261,19 +343,20 @@ impl PyAskTell {
 
     /// Tells the values of the asked points, in their order.
     fn tell(&self, py: Python<'_>, values: Vec<f64>) -> PyResult<()> {
-        match &mut *self.run.lock(py)? {
-            Run::Adaptive(run) => run.tell(&values).map_err(value_error),
-            Run::Paper(p) => p.tell(&values),
-        }
+        let mut run = self.run.lock(py)?;
+        let final_asked = matches!(&*run, Run::Paper(p) if p.final_asked);
+        run.tell_values(&values).map_err(|e| match e {
+            Error::NonFiniteValue { .. } if final_asked => PyValueError::new_err(format!(
+                "{e}: tell finite values (the final evaluation must be finite)"
+            )),
+            e => value_error(e),
+        })
     }
 
     /// Whether the run has ended.
     #[getter]
     fn done(&self, py: Python<'_>) -> PyResult<bool> {
-        Ok(match &*self.run.lock(py)? {
-            Run::Adaptive(run) => run.is_done(),
-            Run::Paper(p) => p.is_done(),
-        })
+        Ok(self.run.lock(py)?.is_done())
     }
 
     /// Whether the asked point is the paper loop's final evaluation (its value is
@@ -283,24 +366,21 @@ impl PyAskTell {
         Ok(matches!(&*self.run.lock(py)?, Run::Paper(p) if p.final_asked))
     }
 
+    /// Iterations completed: generations of the adaptive search, steps of the paper's loop.
+    #[getter]
+    fn nit(&self, py: Python<'_>) -> PyResult<usize> {
+        Ok(self.run.lock(py)?.iteration())
+    }
+
     /// Evaluations told so far.
     #[getter]
     fn nfev(&self, py: Python<'_>) -> PyResult<usize> {
-        Ok(match &*self.run.lock(py)? {
-            Run::Adaptive(run) => run.evaluations(),
-            Run::Paper(p) => p.run.history().evaluations + usize::from(p.final_value.is_some()),
-        })
+        Ok(self.run.lock(py)?.evaluations())
     }
 
     /// `(x, fun)`: the best point told so far and its value (the adaptive search), or None.
     fn best<'py>(&self, py: Python<'py>) -> PyResult<Option<(Bound<'py, PyAny>, f64)>> {
-        match &*self.run.lock(py)? {
-            Run::Adaptive(run) => match run.best() {
-                Some((x, fun)) => Ok(Some((array_like(py, x.to_vec(), &self.shape)?, fun))),
-                None => Ok(None),
-            },
-            Run::Paper(_) => Ok(None),
-        }
+        best_of(py, &*self.run.lock(py)?, &self.shape)
     }
 
     /// The adaptive search's overall spread now (NaN for the paper's loop).
@@ -313,27 +393,8 @@ impl PyAskTell {
 
     /// The paper loop's last iteration: `(iterations done, x, sigma, mean value, gradient,
     /// evaluations)`; None before the first and for the adaptive search.
-    #[allow(clippy::type_complexity)]
-    fn last_step<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> PyResult<Option<(usize, Bound<'py, PyAny>, f64, f64, Bound<'py, PyAny>, usize)>> {
-        let run = self.run.lock(py)?;
-        let Run::Paper(p) = &*run else {
-            return Ok(None);
-        };
-        let (Some(&sigma), Some(estimate)) = (p.run.history().sigma.last(), p.run.last_estimate())
-        else {
-            return Ok(None);
-        };
-        Ok(Some((
-            p.run.iteration(),
-            array_like(py, p.run.theta().to_vec(), &self.shape)?,
-            sigma,
-            estimate.mean_value,
-            array_like(py, estimate.gradient.clone(), &self.shape)?,
-            p.run.history().evaluations,
-        )))
+    fn last_step<'py>(&self, py: Python<'py>) -> PyResult<Option<Step<'py>>> {
+        last_step_of(py, &*self.run.lock(py)?, &self.shape)
     }
 
     /// The paper loop's raw results so far, as [`PyAskTell::result`] gives them at the end
@@ -365,6 +426,49 @@ impl PyAskTell {
         }
         Ok(Some(out))
     }
+}
+
+/// `(x, fun)`: the adaptive search's best point so far and its value; None before any
+/// value and for the paper's loop.
+pub(crate) fn best_of<'py>(
+    py: Python<'py>,
+    run: &Run,
+    shape: &[usize],
+) -> PyResult<Option<(Bound<'py, PyAny>, f64)>> {
+    match run {
+        Run::Adaptive(run) => match run.best() {
+            Some((x, fun)) => Ok(Some((array_like(py, x.to_vec(), shape)?, fun))),
+            None => Ok(None),
+        },
+        Run::Paper(_) => Ok(None),
+    }
+}
+
+/// The paper loop's last iteration: `(iterations done, x, sigma, mean value, gradient,
+/// evaluations)`.
+pub(crate) type Step<'py> = (usize, Bound<'py, PyAny>, f64, f64, Bound<'py, PyAny>, usize);
+
+/// The paper loop's last iteration; None before the first and for the adaptive search.
+pub(crate) fn last_step_of<'py>(
+    py: Python<'py>,
+    run: &Run,
+    shape: &[usize],
+) -> PyResult<Option<Step<'py>>> {
+    let Run::Paper(p) = run else {
+        return Ok(None);
+    };
+    let (Some(&sigma), Some(estimate)) = (p.run.history().sigma.last(), p.run.last_estimate())
+    else {
+        return Ok(None);
+    };
+    Ok(Some((
+        p.run.iteration(),
+        array_like(py, p.run.theta().to_vec(), shape)?,
+        sigma,
+        estimate.mean_value,
+        array_like(py, estimate.gradient.clone(), shape)?,
+        p.run.history().evaluations,
+    )))
 }
 
 /// The paper loop's raw results: `x`, `nit`, `nfev`, the final value and the records.

@@ -1,20 +1,282 @@
-//! `_drive`: an adaptive or polished `_AskTell` run driven by the library's
-//! [`plateau_free::lifecycle::Driver`] with a Python evaluator, so that the run's lifecycle
-//! (interrupt, progress line, trace, checkpoint) is the library's, not a second copy.
+//! `_drive`: a `plateau_free.minimize` run (adaptive, polished, the paper's loop) driven by
+//! the library's [`Driver`], so that the run's lifecycle (interrupt, progress line, history,
+//! checkpoint) is the library's, written once.
 //!
-//! The evaluator (`evaluate(points, seeds) -> values`) keeps the Python-side work: `args`,
-//! workers and executors, exceptions counted as failures, `on_failure='raise'`. A truthy
-//! return of `callback(iteration, evaluations, best, sigma)` or a pending Ctrl-C (checked
-//! after every tell) triggers the driver's interrupt: the run ends at the next turn with
-//! `Stop::Interrupted` and its best point so far.
+//! Python keeps what is Python's: the evaluator (`evaluate(points, seeds) -> values`: `args`,
+//! workers and executors, exceptions counted as failures, `on_failure='raise'`), the callback's
+//! arguments and the result's fields. The run is a copy of the `_AskTell`'s, put back at the
+//! end (also when the run fails), so the result is read from the `_AskTell` as before.
+
+use std::collections::HashSet;
+use std::io::Write;
+use std::sync::OnceLock;
 
 use super::*;
+use crate::ask_tell::{best_of, copy_of, last_step_of, Run};
 use plateau_free::lifecycle::{
-    Checkpoint, Driver, Interrupt, Observer, Progress, ProgressLine, Trace,
+    AskAndTell, Checkpoint, Driver, Interrupt, ProgressLine, Trace, TraceRow,
 };
+use plateau_free::Ask;
 
-/// What ended a driven run early: an exception from Python (the evaluator's, re-raised
-/// unchanged) or the library's error.
+/// What a driven run tells Python besides its end.
+#[derive(Default)]
+struct Side {
+    /// Why the run ended early: `"interrupted"` (Ctrl-C), `"callback"` or `"raised"`.
+    why: Option<&'static str>,
+    /// The callback's exception.
+    raised: Option<PyErr>,
+    /// The iteration the checkpoint's run had reached, and whether it had ended.
+    restored: Option<(usize, bool)>,
+}
+
+/// The run as the driver holds it: the `_AskTell`'s run with its history and the evaluator's
+/// failure counts (saved with it), the Python settings a checkpoint must match, and the
+/// callback.
+struct Driven {
+    run: Run,
+    shape: Vec<usize>,
+    trace: Trace,
+    settings: Vec<(&'static str, String)>,
+    evaluator: Py<PyAny>,
+    after: Option<Py<PyAny>>,
+    interrupt: Interrupt,
+    side: Arc<Mutex<Side>>,
+}
+
+/// The evaluator's counts that a resumed run goes on from (`_Evaluator`'s attributes).
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Counts {
+    failures: usize,
+    exceptions: usize,
+    first_error: Option<String>,
+}
+
+/// A checkpoint's state: the run, its history, the counts.
+#[derive(serde::Serialize)]
+struct SavedView<'a> {
+    run: &'a Run,
+    trace: &'a Trace,
+    counts: Counts,
+}
+
+#[derive(serde::Deserialize)]
+struct Saved {
+    run: Run,
+    trace: Trace,
+    counts: Counts,
+}
+
+impl Driven {
+    fn side(&self) -> std::sync::MutexGuard<'_, Side> {
+        self.side.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Ends the run at the next turn, for `why` (the first reason given stays).
+    fn stop(&self, why: &'static str, error: Option<PyErr>) {
+        let mut side = self.side();
+        side.why.get_or_insert(why);
+        if let Some(error) = error {
+            side.raised.get_or_insert(error);
+        }
+        self.interrupt.trigger();
+    }
+
+    /// After an iteration: a pending Ctrl-C, then the callback (`after(nit, nfev, info)`,
+    /// `info` the adaptive search's best `(x, fun)` or the paper loop's last step); a truthy
+    /// return or an exception ends the run.
+    fn after_iteration(&self, py: Python<'_>, iteration: usize) {
+        if py.check_signals().is_err() {
+            return self.stop("interrupted", None);
+        }
+        let Some(after) = &self.after else {
+            return;
+        };
+        let info = match &self.run {
+            Run::Adaptive(_) => best_of(py, &self.run, &self.shape)
+                .and_then(|b| b.into_pyobject(py).map(|o| o.into_any().unbind())),
+            Run::Paper(_) => last_step_of(py, &self.run, &self.shape)
+                .and_then(|s| s.into_pyobject(py).map(|o| o.into_any().unbind())),
+        };
+        let called = info.and_then(|info| {
+            after
+                .call1(py, (iteration, self.run.evaluations(), info))
+                .and_then(|r| r.bind(py).is_truthy())
+        });
+        match called {
+            Ok(true) => self.stop("callback", None),
+            Ok(false) => {}
+            Err(error) => self.stop("raised", Some(error)),
+        }
+    }
+
+    fn counts(&self, py: Python<'_>) -> PyResult<Counts> {
+        let e = self.evaluator.bind(py);
+        Ok(Counts {
+            failures: e.getattr("failures")?.extract()?,
+            exceptions: e.getattr("exceptions")?.extract()?,
+            first_error: e.getattr("first_error_text")?.extract()?,
+        })
+    }
+
+    fn set_counts(&self, py: Python<'_>, counts: &Counts) -> PyResult<()> {
+        let e = self.evaluator.bind(py);
+        e.setattr("failures", counts.failures)?;
+        e.setattr("exceptions", counts.exceptions)?;
+        e.setattr("first_error_text", counts.first_error.clone())
+    }
+}
+
+/// A checkpoint error naming what Python refused.
+fn state_error(reason: impl std::fmt::Display) -> Error {
+    Error::Checkpoint {
+        path: String::new(),
+        reason: reason.to_string(),
+    }
+}
+
+/// A driven run's end: the run and its history.
+struct Ended {
+    run: Run,
+    trace: Trace,
+}
+
+impl AskAndTell for Driven {
+    type Output = Ended;
+
+    fn ask(&mut self) -> Result<Option<Ask<'_>>, Error> {
+        self.run.ask_points()
+    }
+
+    fn tell(&mut self, values: &[f64]) -> Result<(), Error> {
+        let before = self.run.iteration();
+        self.run.tell_values(values)?;
+        let iteration = self.run.iteration();
+        if iteration > before {
+            self.trace.record(TraceRow {
+                iteration,
+                evaluations: self.run.evaluations(),
+                best: self.run.best_value(),
+                sigma: self.run.sigma(),
+            });
+            Python::attach(|py| self.after_iteration(py, iteration));
+        } else if Python::attach(|py| py.check_signals().is_err()) {
+            self.stop("interrupted", None);
+        }
+        Ok(())
+    }
+
+    fn evaluations(&self) -> usize {
+        self.run.evaluations()
+    }
+
+    fn budget(&self) -> Option<usize> {
+        self.run.budget()
+    }
+
+    fn iteration(&self) -> usize {
+        self.run.iteration()
+    }
+
+    fn sigma(&self) -> f64 {
+        self.run.sigma()
+    }
+
+    fn best_value(&self) -> f64 {
+        self.run.best_value()
+    }
+
+    fn failures(&self) -> usize {
+        Python::attach(|py| self.counts(py).map_or(0, |c| c.failures))
+    }
+
+    fn finish(self) -> Result<Ended, Error> {
+        Ok(Ended {
+            run: self.run,
+            trace: self.trace,
+        })
+    }
+
+    fn so_far(&self) -> Ended {
+        Ended {
+            // The run's own serde state read back: it holds only numbers, so this cannot
+            // fail.
+            run: copy_of(&self.run).expect("a run's serde state reads back"),
+            trace: self.trace.clone(),
+        }
+    }
+
+    /// The Python settings first (`fun`'s name, the method, `x0` and its shape, the options),
+    /// then the library's that they do not name.
+    fn identity(&self) -> Vec<(&'static str, String)> {
+        let mut identity = self.settings.clone();
+        for (name, value) in self.run.identity() {
+            if !identity.iter().any(|(n, _)| *n == name) {
+                identity.push((name, value));
+            }
+        }
+        identity
+    }
+
+    fn save(&self, out: &mut Vec<u8>) -> Result<(), Error> {
+        let counts = Python::attach(|py| self.counts(py)).map_err(state_error)?;
+        let view = SavedView {
+            run: &self.run,
+            trace: &self.trace,
+            counts,
+        };
+        serde_json::to_writer(out, &view).map_err(|e| state_error(format!("not written: {e}")))
+    }
+
+    fn restore(&mut self, bytes: &[u8]) -> Result<(), Error> {
+        let saved: Saved =
+            serde_json::from_slice(bytes).map_err(|e| state_error(format!("damaged state: {e}")))?;
+        Python::attach(|py| self.set_counts(py, &saved.counts)).map_err(state_error)?;
+        self.run = saved.run;
+        self.trace = saved.trace;
+        self.side().restored = Some((self.run.iteration(), self.run.is_done()));
+        Ok(())
+    }
+}
+
+/// Python's `sys.stdout`, for the progress line (`disp=True` prints where `print` does).
+struct Stdout;
+
+impl Write for Stdout {
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        let text = String::from_utf8_lossy(bytes);
+        Python::attach(|py| {
+            let out = py.import("sys")?.getattr("stdout")?;
+            out.call_method1("write", (text.as_ref(),))?;
+            Ok::<_, PyErr>(())
+        })
+        .map_err(std::io::Error::other)?;
+        Ok(bytes.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Python::attach(|py| py.import("sys")?.getattr("stdout")?.call_method0("flush").map(drop))
+            .map_err(std::io::Error::other)
+    }
+}
+
+/// A setting's name for a checkpoint's identity, which takes static names: interned, each
+/// name once per process (the names are `minimize`'s options, a fixed set).
+fn interned(name: &str) -> &'static str {
+    static NAMES: OnceLock<Mutex<HashSet<&'static str>>> = OnceLock::new();
+    let mut names = NAMES
+        .get_or_init(Default::default)
+        .lock()
+        .unwrap_or_else(|p| p.into_inner());
+    if let Some(held) = names.get(name) {
+        return held;
+    }
+    let held: &'static str = Box::leak(name.to_owned().into_boxed_str());
+    names.insert(held);
+    held
+}
+
+/// What ended a driven run with an error: the evaluator's exception (re-raised unchanged) or
+/// the library's.
 enum DriveError {
     Python(PyErr),
     Library(Error),
@@ -26,75 +288,58 @@ impl From<Error> for DriveError {
     }
 }
 
-impl DriveError {
-    fn into_py(self) -> PyErr {
-        match self {
-            DriveError::Python(error) => error,
-            DriveError::Library(error) => value_error(error),
-        }
+/// The asked points' values from `evaluate(points, seeds)` (points shaped `(k, *x0.shape)`).
+fn evaluate_ask(
+    py: Python<'_>,
+    evaluate: &Bound<'_, PyAny>,
+    shape: &[usize],
+    ask: Ask<'_>,
+    out: &mut [f64],
+) -> Result<(), DriveError> {
+    let mut dims = vec![ask.len()];
+    dims.extend(shape);
+    let points = ask
+        .points()
+        .as_flat()
+        .to_vec()
+        .into_pyarray(py)
+        .reshape(dims)
+        .map_err(DriveError::Python)?;
+    let seeds = ask.seeds().to_vec().into_pyarray(py);
+    let values: Vec<f64> = evaluate
+        .call1((points, seeds))
+        .and_then(|v| v.extract())
+        .map_err(DriveError::Python)?;
+    if values.len() != out.len() {
+        return Err(DriveError::Library(Error::TellCount {
+            expected: out.len(),
+            got: values.len(),
+        }));
     }
+    out.copy_from_slice(&values);
+    Ok(())
 }
 
-/// After every tell: a pending Ctrl-C, or the Python callback's truthy return, triggers the
-/// interrupt; the first exception (the signal's, the callback's) is kept to re-raise or
-/// report.
-struct Hooks {
-    interrupt: Interrupt,
-    callback: Option<Py<PyAny>>,
-    /// Why the interrupt was triggered: `"interrupted"` (Ctrl-C) or `"callback"`.
-    why: Arc<Mutex<Option<&'static str>>>,
-    raised: Arc<Mutex<Option<PyErr>>>,
-}
-
-impl Hooks {
-    fn stop(&self, why: &'static str) {
-        let mut held = self.why.lock().unwrap_or_else(|p| p.into_inner());
-        held.get_or_insert(why);
-        self.interrupt.trigger();
-    }
-}
-
-impl Observer for Hooks {
-    fn observe(&mut self, p: &Progress) {
-        Python::attach(|py| {
-            if py.check_signals().is_err() {
-                self.stop("interrupted");
-                return;
-            }
-            let Some(callback) = &self.callback else {
-                return;
-            };
-            let called = callback
-                .call1(py, (p.iteration, p.evaluations, p.best, p.sigma))
-                .and_then(|r| r.bind(py).is_truthy());
-            match called {
-                Ok(true) => self.stop("callback"),
-                Ok(false) => {}
-                Err(error) => {
-                    self.raised
-                        .lock()
-                        .unwrap_or_else(|p| p.into_inner())
-                        .get_or_insert(error);
-                    self.stop("raised");
-                }
-            }
-        });
-    }
-}
-
-/// Runs the adaptive or polished `run` to its end with the library's driver and returns
-/// `(result, why, trace)`: `result` the library's minimum as a dict (`x`, `fun`, `nit`,
-/// `nfev`, `stop`), `why` None for a run that ended by itself, else `"interrupted"`,
-/// `"callback"` or `"raised"`; `trace` the rows `(iteration, evaluations, best, sigma)` of
-/// the library's [`Trace`] (`keep` rows at least). `disp` writes the library's progress line
-/// on stderr; `checkpoint` is the library's [`Checkpoint`] (every `checkpoint_every`
-/// iterations, else on its timer), checked against `identity` (the objective's name) too.
+/// Runs `run` (an `_AskTell`) to its end with the library's driver, `evaluate` (an
+/// `_Evaluator`: callable on `(points, seeds)`, with the attributes `failures`,
+/// `exceptions` and `first_error_text` that a checkpoint keeps) giving the values. The
+/// run's end is put back into `run`. Returns a dict: `why` (None for a run that ended by
+/// itself, else `"interrupted"`, `"callback"`), `restored` (None, or `(iteration,
+/// finished)` of a run resumed from `checkpoint`), `rows` (`(nfev, best, sigma)` of the
+/// iterations the history kept, evenly thinned to between `keep` and `2 keep`) and
+/// `dropped` (the iterations not kept).
+///
+/// `disp` prints the library's progress line on `sys.stdout`; `checkpoint` is the library's
+/// [`Checkpoint`] (every `checkpoint_every` iterations, else on its timer), its identity
+/// `settings` (name, value) first; `after(nit, nfev, info)` is called after every
+/// iteration.
 ///
 /// # Errors
-/// The evaluator's exception unchanged; the library's errors as ValueError.
+/// The evaluator's or the callback's exception unchanged; the library's errors as
+/// ValueError. The run so far is in `run` then.
 #[pyfunction]
-#[pyo3(signature = (run, evaluate, *, disp=false, keep=1_000_000, checkpoint=None, checkpoint_every=None, callback=None))]
-#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+#[pyo3(signature = (run, evaluate, *, disp=false, keep=1_000_000, checkpoint=None, checkpoint_every=None, settings=Vec::new(), after=None))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn _drive<'py>(
     py: Python<'py>,
     run: PyRef<'py, PyAskTell>,
@@ -103,28 +348,25 @@ pub(crate) fn _drive<'py>(
     keep: usize,
     checkpoint: Option<std::path::PathBuf>,
     checkpoint_every: Option<usize>,
-    callback: Option<Py<PyAny>>,
-) -> PyResult<(
-    Bound<'py, PyDict>,
-    Option<&'static str>,
-    Vec<(usize, usize, f64, f64)>,
-)> {
-    let (method, shape) = run.take_adaptive(py)?;
+    settings: Vec<(String, String)>,
+    after: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (held, shape) = run.copy_run(py)?;
     let interrupt = Interrupt::new();
-    let hooks = Hooks {
+    let side = Arc::new(Mutex::new(Side::default()));
+    let driven = Driven {
+        run: held,
+        shape: shape.clone(),
+        trace: Trace::new(keep),
+        settings: settings.iter().map(|(n, v)| (interned(n), v.clone())).collect(),
+        evaluator: evaluate.clone().unbind(),
+        after,
         interrupt: interrupt.clone(),
-        callback,
-        why: Arc::default(),
-        raised: Arc::default(),
+        side: side.clone(),
     };
-    let (why, raised) = (hooks.why.clone(), hooks.raised.clone());
-    let mut trace = Trace::new(keep);
-    let mut driver = Driver::new()
-        .interrupt(interrupt)
-        .observe(&mut trace)
-        .observe(hooks);
+    let mut driver = Driver::new().interrupt(interrupt);
     if disp {
-        driver = driver.observe(ProgressLine::new(std::io::stderr()));
+        driver = driver.observe(ProgressLine::new(Stdout));
     }
     if let Some(path) = checkpoint {
         let saved = Checkpoint::new(path);
@@ -133,57 +375,34 @@ pub(crate) fn _drive<'py>(
             None => saved,
         });
     }
-    let driven = driver.run(method, |_workers, ask, out: &mut [f64]| {
-        let mut dims = vec![ask.len()];
-        dims.extend(&shape);
-        let points = ask
-            .points()
-            .as_flat()
-            .to_vec()
-            .into_pyarray(py)
-            .reshape(dims)
-            .map_err(DriveError::Python)?;
-        let seeds = ask.seeds().to_vec().into_pyarray(py);
-        let values: Vec<f64> = evaluate
-            .call1((points, seeds))
-            .and_then(|v| v.extract())
-            .map_err(DriveError::Python)?;
-        if values.len() != out.len() {
-            return Err(DriveError::Library(Error::TellCount {
-                expected: out.len(),
-                got: values.len(),
-            }));
-        }
-        out.copy_from_slice(&values);
-        Ok(())
+    let ended = driver.run(driven, |_, ask, out| {
+        evaluate_ask(py, &evaluate, &shape, ask, out)
     });
-    let minimum = match driven {
-        Ok(minimum) => minimum,
-        Err(failure) => return Err(failure.error.into_py()),
+    let mut side = std::mem::take(&mut *side.lock().unwrap_or_else(|p| p.into_inner()));
+    let trace = match ended {
+        Ok(end) => {
+            run.put_run(py, end.run)?;
+            end.trace
+        }
+        Err(failure) => {
+            if let Some(end) = failure.result {
+                run.put_run(py, end.run)?;
+            }
+            return Err(match failure.error {
+                DriveError::Python(error) => error,
+                DriveError::Library(error) => value_error(error),
+            });
+        }
     };
-    if let Some(error) = raised.lock().unwrap_or_else(|p| p.into_inner()).take() {
+    if let Some(error) = side.raised.take() {
         return Err(error);
     }
-    let rows = trace
-        .rows()
-        .iter()
-        .map(|r| (r.iteration, r.evaluations, r.best, r.sigma))
-        .collect();
-    let why = *why.lock().unwrap_or_else(|p| p.into_inner());
-    Ok((minimum_dict(py, &minimum, &shape)?, why, rows))
-}
-
-/// The library's minimum as the dict `_adaptive_result` reads.
-fn minimum_dict<'py>(
-    py: Python<'py>,
-    m: &RsMinimum,
-    shape: &[usize],
-) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("x", array_like(py, m.x.clone(), shape)?)?;
-    d.set_item("fun", m.fun)?;
-    d.set_item("nit", m.iterations)?;
-    d.set_item("nfev", m.evaluations)?;
-    d.set_item("stop", format!("{:?}", m.stop))?;
-    Ok(d)
+    let rows: Vec<(usize, f64, f64)> =
+        trace.rows().iter().map(|r| (r.evaluations, r.best, r.sigma)).collect();
+    let out = PyDict::new(py);
+    out.set_item("why", side.why)?;
+    out.set_item("restored", side.restored)?;
+    out.set_item("dropped", trace.iterations_seen() - rows.len())?;
+    out.set_item("rows", rows)?;
+    Ok(out)
 }
