@@ -48,9 +48,11 @@ def options_of(method: str) -> dict[str, Any]:
 def iterations_in(path: Path) -> int:
     """The iterations a checkpoint file holds: the driver's (adaptive, polished, plateau) or
     the baselines' loop's."""
-    saved = json.loads(path.read_text())
-    if "payload" in saved:
-        return int(saved["payload"]["progress"]["nit"])
+    text = path.read_text()
+    if "\n" in text:  # the library's file: a header line, then the driven run's state
+        state = json.loads(text.split("\n", 1)[1])
+        return int(next(iter(state["run"].values()))["run"]["progress"]["iteration"])
+    saved = json.loads(text)
     assert len(saved["record"]["sigma"]) == saved["state"]["iteration"]
     return int(saved["state"]["iteration"])
 
