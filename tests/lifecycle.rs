@@ -455,6 +455,28 @@ mod checkpoints {
     }
 
     #[test]
+    fn a_run_that_never_saw_a_finite_value_resumes() {
+        // Its result's value is infinite: the state must keep it (JSON has no infinity).
+        let nan = |_: &[f64]| f64::NAN;
+        let m = Minimizer::new(nan).budget(60).seed(1);
+        let path = path("never-finite.json");
+        let first = m
+            .run_with(
+                &[0.0, 0.0],
+                Driver::new().checkpoint(Checkpoint::new(&path)),
+            )
+            .unwrap();
+        assert!(first.fun.is_infinite() && first.failures == 60);
+        let again = m
+            .run_with(
+                &[0.0, 0.0],
+                Driver::new().checkpoint(Checkpoint::new(&path)),
+            )
+            .unwrap();
+        assert_eq!(again, first);
+    }
+
+    #[test]
     fn an_error_inside_an_evaluation_leaves_the_last_turn_to_resume_from() {
         // The evaluation of turn 30 fails (Ctrl-C inside an evaluation, an error): the file
         // holds the end of turn 29, written although no timer was due, and the resumed run

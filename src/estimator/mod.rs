@@ -29,6 +29,7 @@ pub struct Estimate {
     pub evaluations: usize,
     /// The mean of the evaluated values of `f` (at the perturbed points, not at theta): a
     /// noisy estimate of the smoothed objective itself.
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::float"))]
     pub mean_value: f64,
     /// How many times the estimate's perturbations were redrawn because `f` returned a
     /// non-finite value ([`OnFailure::Resample`]); 0 otherwise.

@@ -61,6 +61,7 @@ pub struct Minimum {
     /// The best point seen. The start is evaluated first, so `f(x) <= f(x0)` always.
     pub x: Vec<f64>,
     /// `f(x)`.
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::float"))]
     pub fun: f64,
     /// Evaluations of `f` spent (at most the budget, whatever the method and the budget).
     pub evaluations: usize,
@@ -70,6 +71,7 @@ pub struct Minimum {
     /// Restarts of the search distribution (0 for the paper's loop).
     pub restarts: usize,
     /// The spread at the end.
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::float"))]
     pub sigma: f64,
     /// Why the run ended.
     pub stop: Stop,
