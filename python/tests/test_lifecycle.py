@@ -233,11 +233,11 @@ def test_ctrl_c_returns_the_best_so_far(method: str) -> None:
 def test_disp_prints_a_plain_line(capsys: pytest.CaptureFixture[str]) -> None:
     result = plateau_free.minimize(rosenbrock, [0.0, 0.0], budget=200, disp=True)
     out = capsys.readouterr().out.strip().splitlines()
-    # The library's line (lifecycle::ProgressLine): the first iteration, then the end.
-    assert out[0].startswith("iteration 1  evaluations ") and "/200  best " in out[0]
+    # The library's line (lifecycle::ProgressLine): the start's, then the end.
+    assert out[0].startswith("iteration 0  evaluations 1/200  best ")
     assert re.fullmatch(
         rf"end: iteration {result.nit}  evaluations {result.nfev}/200  best \d\.\d{{3}}e-?\d+  "
-        rf"sigma \d\.\d{{3}}e-?\d+  elapsed \d+\.\d s  \({re.escape(result.message)}\)",
+        rf"sigma \d\.\d{{3}}e-?\d+  elapsed \d+\.\d s",
         out[-1],
     ), out[-1]
     plateau_free.minimize(rosenbrock, [0.0, 0.0], budget=200)
@@ -251,9 +251,13 @@ def test_the_history_is_bounded_and_true() -> None:
     assert h.nfev[-1] == result.nfev and np.all(np.diff(h.nfev.astype(np.int64)) > 0)
     assert np.all(np.diff(h.fun) <= 0) and h.fun[-1] == result.fun
     assert np.all(h.sigma > 0)
+    # Kept to between 10 and 20 rows, evenly over the whole run, the last iteration's last.
     kept = plateau_free.minimize(rosenbrock, [0.0, 0.0], budget=3000, seed=2, patience=0, keep_history=10)
-    assert len(kept.history) == 10 and kept.history.dropped == result.nit - 10
-    assert kept.history.fun.tobytes() == h.fun[-10:].tobytes()
+    k = kept.history
+    assert 10 <= len(k) <= 21 and k.dropped == result.nit - len(k)
+    assert k.nfev[0] == h.nfev[0] and k.nfev[-1] == h.nfev[-1] and k.fun[-1] == h.fun[-1]
+    assert set(k.nfev.tolist()) <= set(h.nfev.tolist())
+    assert np.all(np.diff(k.fun) <= 0)
 
 
 def test_plot_history_draws_both_kinds(tmp_path: Path) -> None:
@@ -324,9 +328,9 @@ def test_a_resumed_run_counts_the_failures_of_the_whole_run(tmp_path: Path, meth
 def test_a_checkpoint_of_another_run_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "run.json"
     plateau_free.minimize(CtrlC(50), [0.0, 0.0], checkpoint=path, budget=500)
-    with pytest.raises(ValueError, match=r"checkpoint: budget is 500 in .*, 600 here"):
+    with pytest.raises(ValueError, match=r"checkpoint .* belongs to another run: budget is 500 there, 600 here"):
         plateau_free.minimize(CtrlC(0), [0.0, 0.0], checkpoint=path, budget=600)
-    with pytest.raises(ValueError, match=r"checkpoint: fun is .*CtrlC.* in .*, .*staircase.* here"):
+    with pytest.raises(ValueError, match=r"fun is .*CtrlC.* there, .*staircase.* here"):
         plateau_free.minimize(staircase, [0.0, 0.0], checkpoint=path, budget=500)
 
 
