@@ -474,6 +474,25 @@ mod checkpoints {
             )
             .unwrap();
         assert_eq!(again, first);
+        // Half the space fails: generations whose median is infinite, saved mid-run.
+        let holes = |x: &[f64]| if x[0] > 0.9 { f64::NAN } else { rosenbrock(x) };
+        let m = Minimizer::new(holes).budget(400).seed(1);
+        let alone = m.run(&[0.0, 0.0]).unwrap();
+        assert!(alone.failures > 0);
+        let path = path.with_extension("holes");
+        let stop = Interrupt::new();
+        let driver = Driver::new()
+            .interrupt(stop.clone())
+            .observe(StopAt(30, stop));
+        m.run_with(&[0.0, 0.0], driver.checkpoint(Checkpoint::new(&path)))
+            .unwrap();
+        let resumed = m
+            .run_with(
+                &[0.0, 0.0],
+                Driver::new().checkpoint(Checkpoint::new(&path)),
+            )
+            .unwrap();
+        assert_eq!(resumed, alone);
     }
 
     #[test]

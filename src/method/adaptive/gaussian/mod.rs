@@ -140,9 +140,12 @@ pub(crate) struct SearchGaussian {
     pc: DVector<f64>,
     pub generation: usize,
     eigen_generation: usize,
-    /// The best value of every generation of this run.
+    /// The best value of every generation of this run (infinite for a generation whose
+    /// every point failed).
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::floats"))]
     best_history: Vec<f64>,
     /// The median value of every generation of this run.
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::floats"))]
     median_history: Vec<f64>,
     /// Mirror every other draw (`y_{2k+1} = -y_{2k}`): the antithetic pairs of the paper.
     pub mirrored: bool,
