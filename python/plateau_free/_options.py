@@ -184,8 +184,10 @@ _OPTIONS: dict[str, _Option] = {
         Iterations between checkpoints; 0: only at the end, on Ctrl-C and on an exception
         (default: about every 30 seconds).""", ask_tell=False),
     "keep_history": _row(_counter(1, " of iterations"), _ALL, "int, optional", """
-        How many of the last iterations ``result.history`` keeps (default a million, so that
-        a run of any length has bounded memory); ``history.dropped`` counts the others."""),
+        How many iterations ``result.history`` keeps (default a million, so that a run of any
+        length has bounded memory): the paper's loop, the last ones; adaptive and polished,
+        between ``keep_history`` and twice as many spread evenly over the run, the last
+        iteration's last. ``history.dropped`` counts the others."""),
     "target": _row(_not_nan, _SEARCH, "float, optional", """
         Adaptive, polished: stop as soon as ``fun`` reaches ``target`` or below."""),
     "population": _row(_counter(2), _SEARCH, "int, optional", """

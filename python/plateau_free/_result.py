@@ -157,7 +157,9 @@ class History:
 class SearchHistory:
     """The adaptive search's record of a :func:`minimize` run (``method='adaptive'`` or
     ``'polished'``): one row per iteration (a generation, or an estimate of the paper's loop
-    before the polish), the last ``keep_history`` of them.
+    before the polish) while there is room, then evenly thinned (the library's
+    ``lifecycle::Trace``): between ``keep_history`` and twice as many rows over the whole run,
+    the last iteration's last.
 
     Attributes
     ----------
@@ -169,7 +171,7 @@ class SearchHistory:
         The search distribution's overall spread after the iteration (NaN where the run has
         none, as in the paper's loop of ``'polished'``).
     dropped : int
-        The iterations before these, no longer kept.
+        The iterations not kept.
     """
 
     __slots__ = ("nfev", "fun", "sigma", "dropped")

@@ -37,7 +37,7 @@ pub(crate) struct Paper {
     final_evaluation: bool,
     record: Record,
     /// Whether the final evaluation is asked and awaits its value.
-    final_asked: bool,
+    pub(crate) final_asked: bool,
     final_value: Option<f64>,
     /// The final evaluation's point and seed while it is asked (what its `Ask` borrows).
     #[serde(default)]
@@ -158,7 +158,10 @@ impl Run {
     pub(crate) fn best_value(&self) -> f64 {
         match self {
             Run::Adaptive(run) => AskAndTell::best_value(&**run),
-            Run::Paper(p) => p.run.last_estimate().map_or(f64::INFINITY, |e| e.mean_value),
+            Run::Paper(p) => p
+                .run
+                .last_estimate()
+                .map_or(f64::INFINITY, |e| e.mean_value),
         }
     }
 

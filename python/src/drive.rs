@@ -228,8 +228,8 @@ impl AskAndTell for Driven {
     }
 
     fn restore(&mut self, bytes: &[u8]) -> Result<(), Error> {
-        let saved: Saved =
-            serde_json::from_slice(bytes).map_err(|e| state_error(format!("damaged state: {e}")))?;
+        let saved: Saved = serde_json::from_slice(bytes)
+            .map_err(|e| state_error(format!("damaged state: {e}")))?;
         Python::attach(|py| self.set_counts(py, &saved.counts)).map_err(state_error)?;
         self.run = saved.run;
         self.trace = saved.trace;
@@ -254,8 +254,13 @@ impl Write for Stdout {
     }
 
     fn flush(&mut self) -> std::io::Result<()> {
-        Python::attach(|py| py.import("sys")?.getattr("stdout")?.call_method0("flush").map(drop))
-            .map_err(std::io::Error::other)
+        Python::attach(|py| {
+            py.import("sys")?
+                .getattr("stdout")?
+                .call_method0("flush")
+                .map(drop)
+        })
+        .map_err(std::io::Error::other)
     }
 }
 
@@ -358,7 +363,10 @@ pub(crate) fn _drive<'py>(
         run: held,
         shape: shape.clone(),
         trace: Trace::new(keep),
-        settings: settings.iter().map(|(n, v)| (interned(n), v.clone())).collect(),
+        settings: settings
+            .iter()
+            .map(|(n, v)| (interned(n), v.clone()))
+            .collect(),
         evaluator: evaluate.clone().unbind(),
         after,
         interrupt: interrupt.clone(),
@@ -385,11 +393,16 @@ pub(crate) fn _drive<'py>(
             end.trace
         }
         Err(failure) => {
+            let mut final_asked = false;
             if let Some(end) = failure.result {
+                final_asked = matches!(&end.run, Run::Paper(p) if p.final_asked);
                 run.put_run(py, end.run)?;
             }
             return Err(match failure.error {
                 DriveError::Python(error) => error,
+                DriveError::Library(error @ Error::NonFiniteValue { .. }) if final_asked => {
+                    PyValueError::new_err(format!("{error}: the final evaluation must be finite"))
+                }
                 DriveError::Library(error) => value_error(error),
             });
         }
@@ -397,8 +410,11 @@ pub(crate) fn _drive<'py>(
     if let Some(error) = side.raised.take() {
         return Err(error);
     }
-    let rows: Vec<(usize, f64, f64)> =
-        trace.rows().iter().map(|r| (r.evaluations, r.best, r.sigma)).collect();
+    let rows: Vec<(usize, f64, f64)> = trace
+        .rows()
+        .iter()
+        .map(|r| (r.evaluations, r.best, r.sigma))
+        .collect();
     let out = PyDict::new(py);
     out.set_item("why", side.why)?;
     out.set_item("restored", side.restored)?;
