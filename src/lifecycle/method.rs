@@ -1,15 +1,16 @@
 //! [`AskAndTell`]: what the driver needs of a method, and its implementations for the
-//! crate's three ask-and-tell runs.
+//! crate's ask-and-tell runs.
 
 use crate::error::Error;
-use crate::method::{AskTell, PaperAskTell};
+use crate::method::{AskTell, BaselineAskTell, PaperAskTell};
 use crate::run::{Ask, History, Minimum};
 use crate::vector::{LeastSquaresAskTell, VectorMinimum};
 
 /// An ask-and-tell method, as a [`crate::lifecycle::Driver`] runs it: points out, values
 /// in, until the method is done. [`AskTell`] (the adaptive search, the paper's loop and its
-/// polish), [`PaperAskTell`] (the paper's loop alone) and [`LeastSquaresAskTell`] (vector
-/// values) implement it; so can any method of your own.
+/// polish), [`PaperAskTell`] (the paper's loop alone), [`BaselineAskTell`] (the paper's loop
+/// with a baseline estimator) and [`LeastSquaresAskTell`] (vector values) implement it; so
+/// can any method of your own.
 ///
 /// ```
 /// use plateau_free::lifecycle::AskAndTell;
@@ -234,61 +235,72 @@ impl AskAndTell for AskTell {
     saved_as_json!();
 }
 
-impl AskAndTell for PaperAskTell {
-    type Output = History;
+/// [`AskAndTell`] for a run of the paper's loop ([`PaperAskTell`], [`BaselineAskTell`]):
+/// the same inherent methods, the estimator's settings named by `$estimator`.
+macro_rules! paper_loop {
+    ($run:ty, $estimator:expr) => {
+        impl AskAndTell for $run {
+            type Output = History;
 
-    fn ask(&mut self) -> Result<Option<Ask<'_>>, Error> {
-        PaperAskTell::ask(self)
-    }
+            fn ask(&mut self) -> Result<Option<Ask<'_>>, Error> {
+                <$run>::ask(self)
+            }
 
-    fn tell(&mut self, values: &[f64]) -> Result<(), Error> {
-        PaperAskTell::tell(self, values)
-    }
+            fn tell(&mut self, values: &[f64]) -> Result<(), Error> {
+                <$run>::tell(self, values)
+            }
 
-    fn evaluations(&self) -> usize {
-        self.history().evaluations
-    }
+            fn evaluations(&self) -> usize {
+                self.history().evaluations
+            }
 
-    fn iteration(&self) -> usize {
-        PaperAskTell::iteration(self)
-    }
+            fn iteration(&self) -> usize {
+                <$run>::iteration(self)
+            }
 
-    fn sigma(&self) -> f64 {
-        match PaperAskTell::sigma(self) {
-            Some(sigma) => sigma,
-            None => self.history().sigma.last().copied().unwrap_or(f64::NAN),
+            fn sigma(&self) -> f64 {
+                let next = self.optimizer().annealer().sigma(self.iteration());
+                match self.is_done() {
+                    false => next,
+                    true => self.history().sigma.last().copied().unwrap_or(f64::NAN),
+                }
+            }
+
+            fn best_value(&self) -> f64 {
+                self.last_estimate().map_or(f64::INFINITY, |e| e.mean_value)
+            }
+
+            fn finish(self) -> Result<History, Error> {
+                Ok(<$run>::finish(self))
+            }
+
+            fn so_far(&self) -> History {
+                let mut history = self.history().clone();
+                history.stopped_early = !self.is_done();
+                if history.theta.is_empty() {
+                    history.theta.push(self.theta().to_vec());
+                }
+                self.optimizer().trim_exact(&mut history);
+                history
+            }
+
+            fn identity(&self) -> Vec<(&'static str, String)> {
+                let estimator: fn(&$run) -> String = $estimator;
+                vec![
+                    ("start", vector_identity(self.theta())),
+                    ("optimizer", format!("{:?}", self.optimizer())),
+                    ("estimator", estimator(self)),
+                ]
+            }
+
+            #[cfg(feature = "serde")]
+            saved_as_json!();
         }
-    }
-
-    fn best_value(&self) -> f64 {
-        self.last_estimate().map_or(f64::INFINITY, |e| e.mean_value)
-    }
-
-    fn finish(self) -> Result<History, Error> {
-        Ok(PaperAskTell::finish(self))
-    }
-
-    fn so_far(&self) -> History {
-        let mut history = self.history().clone();
-        history.stopped_early = !self.is_done();
-        if history.theta.is_empty() {
-            history.theta.push(self.theta().to_vec());
-        }
-        self.optimizer().trim_exact(&mut history);
-        history
-    }
-
-    fn identity(&self) -> Vec<(&'static str, String)> {
-        vec![
-            ("start", vector_identity(self.theta())),
-            ("optimizer", format!("{:?}", self.optimizer())),
-            ("estimator", format!("{:?}", self.core)),
-        ]
-    }
-
-    #[cfg(feature = "serde")]
-    saved_as_json!();
+    };
 }
+
+paper_loop!(PaperAskTell, |run| format!("{:?}", run.core));
+paper_loop!(BaselineAskTell, |run| format!("{:?}", run.baseline()));
 
 impl AskAndTell for LeastSquaresAskTell {
     type Output = VectorMinimum;

@@ -28,4 +28,4 @@ mod paper;
 mod polished;
 
 pub use minimizer::AskTell;
-pub use paper::{Optimizer, PaperAskTell};
+pub use paper::{Baseline, BaselineAskTell, Optimizer, PaperAskTell};
