@@ -248,6 +248,22 @@ def _native_run(
     if chosen == "polished":
         return _native._AskTell.adaptive(x0, _polished_options(checked)), budget, {}
     o = _PaperOptions.given(checked)
+    if chosen in ("fd", "spsa"):
+        per_iteration = 2 * x0.size if chosen == "fd" else 2
+        iterations, annealer, adam = o.schedule(checked.get("budget"), per_iteration, checked.get("bounds"))
+        run = _native._AskTell.baseline(
+            x0,
+            adam,
+            annealer,
+            iterations,
+            "fd" if chosen == "fd" else "spsa",
+            step=o.step,
+            seed=checked["seed"],
+            record_x=o.record_x,
+            final_evaluation=o.final_evaluation,
+            keep_history=o.keep_history,
+        )
+        return run, budget, {"iterations": iterations, "schedule": repr(annealer)}
     # The estimator's own checks, with its messages (it is never evaluated).
     PlateauFreeGradient(
         lambda x: 0.0,

@@ -43,6 +43,8 @@ class _Run:
         self.x0 = x0
         self.evaluate = evaluate
         self.method = method
+        # The paper's loop and its baselines: the last iterate, the paper's history.
+        self.paper = method in ("plateau", "fd", "spsa")
         self.checked = checked
         self.budget = budget
         self.callback = callback
@@ -77,7 +79,7 @@ class _Run:
 
     def _after(self, nit: int, nfev: int, info: Any) -> Any:
         """The callback after an iteration, in the method's form."""
-        if self.method == "plateau":
+        if self.paper:
             _, x, sigma, value, gradient, at = info
             return self.callback.paper(nit - 1, x, sigma, value, gradient, at)
         if info is None:
@@ -91,22 +93,23 @@ class _Run:
         how = None if self.callback is None else self.callback.stop
         if stop is None and self.run.done:
             raw = self.run.result()
-            if self.method == "plateau":
+            if self.paper:
                 result = _paper_result(raw, raw["final_value"])
             else:
                 result = _adaptive_result(raw, self.budget)
         else:
             raw = self._partial()
             final = None
-            if stop == "callback" and self.method == "plateau":
+            if stop == "callback" and self.paper:
                 final = self._final_value(raw["x"])
-            result = _stopped_result(raw, self.method, stop or "raised", how, error, final)
+            method = "plateau" if self.paper else self.method
+            result = _stopped_result(raw, method, stop or "raised", how, error, final)
         return self._finish(result, ended)
 
     def _partial(self) -> dict[str, Any]:
         """The raw results so far: the paper loop's from the Rust side, the adaptive search's
         best point (the start before any value)."""
-        if self.method == "plateau":
+        if self.paper:
             raw: dict[str, Any] = self.run.partial()
             return raw
         best = self.run.best()
@@ -124,7 +127,7 @@ class _Run:
     def _finish(self, result: OptimizeResult, ended: dict[str, Any]) -> OptimizeResult:
         e = self.evaluate
         result.update(nfail=e.failures, seed=self.checked["seed"], from_checkpoint=ended["restored"] is not None)
-        if self.method != "plateau":
+        if not self.paper:
             rows = np.array(ended["rows"], dtype=np.float64).reshape(-1, 3)
             result["history"] = SearchHistory(
                 nfev=rows[:, 0].astype(np.uint64), fun=rows[:, 1], sigma=rows[:, 2], dropped=int(ended["dropped"])

@@ -1,25 +1,22 @@
-""":func:`minimize`: the adaptive search, the polish and the paper's loop as ask-and-tell runs
-driven here (:mod:`plateau_free._drive`), the paper loop's baselines on the Rust ``Optimizer``."""
+""":func:`minimize`: every method (the adaptive search, the polish, the paper's loop and its
+baselines) as an ask-and-tell run on the library's driver (:mod:`plateau_free._drive`)."""
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 from typing import TYPE_CHECKING, Any, Callable, Literal, Optional
 
-import numpy as np
 import numpy.typing as npt
 
 from . import _native
 from ._ask_tell import _native_run
 from ._drive import _drive
-from ._evaluate import _Evaluator, _real_value
-from ._native import FiniteDifference, Spsa
+from ._evaluate import _Evaluator
 from ._checks import _show
-from ._options import Options, _check_call, _options_doc, _PaperOptions
-from ._result import OptimizeResult, _paper_result, _wants_intermediate_result
-from ._saved import _jsonable, _setting_pairs, _settings
+from ._options import Options, _check_call, _options_doc
+from ._result import OptimizeResult, _wants_intermediate_result
+from ._saved import _setting_pairs, _settings
 from ._types import _FloatArray
 
 if TYPE_CHECKING:
@@ -42,8 +39,6 @@ def minimize(
     if not callable(fun):
         raise _native.OptionTypeError(f"fun = {_show(fun)} must be callable")
     chosen, x0_array, checked = _check_call("minimize", method, x0, dict(options))
-    if chosen in ("fd", "spsa"):
-        return _minimize_baseline(fun, x0_array, chosen, checked)
     run, budget, extra = _native_run(chosen, x0_array, checked)
     settings = None
     if checked.get("checkpoint") is not None:
@@ -58,7 +53,8 @@ def minimize(
         batched=checked["batched"],
         seeded=checked["seeded"],
         workers=workers,
-        on_failure=checked["on_failure"],
+        # The baselines have no failure policy: their first failure ends the run.
+        on_failure="raise" if chosen in ("fd", "spsa") else checked["on_failure"],
     )
     return _drive(run, evaluate, chosen, checked, budget, callback, settings, x0_array)
 
@@ -181,75 +177,3 @@ class _Callback:
     def adaptive(self, nit: int, x: _FloatArray, value: float, nfev: int) -> bool:
         """After iteration ``nit`` of the adaptive search, with the best point so far."""
         return self._call(OptimizeResult(x=x, fun=value, nit=nit, nfev=nfev))
-
-
-class _WithArgs:
-    """``fun`` with ``args`` after the point (and the seed), for the baselines' estimators."""
-
-    def __init__(self, fun: Callable[..., Any], args: tuple[Any, ...]) -> None:
-        self.fun = fun
-        self.args = args
-
-    def __call__(self, *head: Any) -> Any:
-        return self.fun(*head, *self.args)
-
-
-def _minimize_baseline(
-    fun: Callable[..., Any], x0: np.ndarray, method: str, checked: dict[str, Any]
-) -> OptimizeResult:
-    """The baselines (``'fd'``, ``'spsa'``) on the Rust ``Optimizer``, then the final
-    evaluation. Ctrl-C returns the last iterate (status 2)."""
-    o = _PaperOptions.given(checked)
-    called = _WithArgs(fun, checked["args"]) if "args" in checked else fun
-    common = dict(seed=checked["seed"], batched=checked["batched"], seeded=checked["seeded"])
-    if method == "fd":
-        estimator: Any = FiniteDifference(called, step=o.step, **common)
-        per_iteration = 2 * x0.size
-    else:
-        estimator, per_iteration = Spsa(called, **common), 2
-    budget, box = checked.get("budget"), checked.get("bounds")
-    iterations, annealer, adam = o.schedule(budget, per_iteration, box)
-    path = checked.get("checkpoint")
-    settings = None
-    if path is not None:
-        extra = {"iterations": iterations, "schedule": repr(annealer)}
-        settings = json.dumps(_jsonable(_settings(fun, x0, method, checked, extra)))
-    callback = _Callback(checked["callback"]) if "callback" in checked else None
-    raw = _native._minimize(
-        estimator,
-        x0,
-        adam,
-        annealer,
-        iterations=iterations,
-        callback=None if callback is None else callback.paper,
-        record_x=o.record_x,
-        checkpoint=path,
-        checkpoint_every=checked.get("checkpoint_every"),
-        settings=settings,
-        keep_history=o.keep_history,
-    )
-    final = None
-    if o.final_evaluation and not raw.get("interrupted"):
-        final = _final(called, raw["x"], checked)
-    result = _paper_result(raw, final, None if callback is None else callback.stop, path)
-    if raw.get("interrupted"):
-        nfev = int(result["nfev"])
-        result.update(
-            success=False, status=2,
-            message=f"interrupted (KeyboardInterrupt) after {nfev} evaluations; x is the last iterate",
-        )  # fmt: skip
-    result.update(nfail=0, seed=checked["seed"])
-    return result
-
-
-def _final(fun: Callable[..., Any], x: np.ndarray, checked: dict[str, Any]) -> float:
-    """``fun(x)`` in whichever form ``fun`` takes, with the run's seed; a NaN or an infinity is
-    refused, naming the point (``result.fun`` is never silently non-finite)."""
-    evaluate = _Evaluator(fun, batched=checked["batched"], seeded=checked["seeded"], on_failure="raise")
-    value = float(evaluate(x.reshape(1, *x.shape), np.array([checked["seed"]], np.uint64))[0])
-    if not np.isfinite(value):
-        raise ValueError(
-            f"fun returned {value!r} at the final x = {np.array2string(x, threshold=8)}: "
-            "the final evaluation must be finite"
-        )
-    return value

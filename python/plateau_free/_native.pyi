@@ -188,7 +188,6 @@ __all__ = [
     "Spsa",
     "_AskTell",
     "_drive",
-    "_minimize",
     "_replace_file",
     "_rust_reference_estimates",
     "_rust_reference_minimize",
@@ -221,6 +220,19 @@ class _AskTell:
         final_evaluation: bool = True,
         keep_history: int | None = None,
         on_failure: str = "raise",
+    ) -> _AskTell: ...
+    @staticmethod
+    def baseline(
+        x0: Any,
+        adam: Adam,
+        annealer: Annealer,
+        iterations: int,
+        baseline: Literal["fd", "spsa"],
+        step: float = 1e-3,
+        seed: int = 0,
+        record_x: bool = False,
+        final_evaluation: bool = True,
+        keep_history: int | None = None,
     ) -> _AskTell: ...
     def _state(self) -> str: ...
     @staticmethod
@@ -267,19 +279,6 @@ class _LeastSquares:
     def evaluations(self) -> int: ...
     def result(self) -> tuple[list[float], float, list[float], int, int, int]: ...
 
-def _minimize(
-    estimator: Any,
-    x0: Any,
-    adam: Adam,
-    annealer: Annealer,
-    iterations: int | None = None,
-    callback: Any = None,
-    record_x: bool = False,
-    checkpoint: str | None = None,
-    checkpoint_every: int | None = None,
-    settings: str | None = None,
-    keep_history: int | None = None,
-) -> dict[str, Any]: ...
 def _rust_reference_estimates(
     x: Any,
     sigma: float,

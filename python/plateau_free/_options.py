@@ -99,7 +99,7 @@ class _Option(NamedTuple):
 _ALL = frozenset({"adaptive", "polished", "plateau", "fd", "spsa"})
 _SEARCH = frozenset({"adaptive", "polished"})  # the Rust Minimizer's runs
 _LOOP = frozenset({"plateau", "fd", "spsa"})  # the paper's loop and its baselines
-_DRIVEN = frozenset({"adaptive", "polished", "plateau"})  # runs of the ask-and-tell driver
+_POLICY = frozenset({"adaptive", "polished", "plateau"})  # the runs with a failure policy
 
 
 def _row(check: Callable[[str, Any], Any], methods: frozenset[str], kind: str, doc: str,
@@ -152,7 +152,7 @@ _OPTIONS: dict[str, _Option] = {
         loop). The paper's loop passes ``x``, ``fun`` (the iteration's mean value), ``nit``,
         ``nfev``, ``sigma`` and ``jac`` (the gradient estimate); adaptive the best ``x`` and
         ``fun`` so far, with ``nit`` and ``nfev``.""", ask_tell=False),
-    "on_failure": _row(_policy, _DRIVEN, "'continue' or 'raise'", """
+    "on_failure": _row(_policy, _POLICY, "'continue' or 'raise'", """
         What a failed evaluation does: NaN, an infinity, or an exception raised by ``fun``
         (an ``Exception``; Ctrl-C is not a failure). ``'continue'`` (default): the point
         ranks below every finite value (the paper's loop redraws the estimate), the run goes
@@ -161,13 +161,13 @@ _OPTIONS: dict[str, _Option] = {
         or an infinity) and ``exc.result`` holds the result so far, its best point
         included. Not an option of the baselines (``'fd'``, ``'spsa'``), which end on the
         first failure."""),
-    "workers": _row(_workers, _DRIVEN, "int, Executor or callable, optional", """
+    "workers": _row(_workers, _ALL, "int, Executor or callable, optional", """
         Where an iteration's points are evaluated: a number of threads, a
         ``concurrent.futures.Executor`` (its ``map``), or a map-like callable
         ``workers(function, points)`` (scipy's ``differential_evolution`` convention; a
         process pool needs ``fun`` to pickle). The result is bit for bit the run of one
         worker (default 1: in this thread).""", ask_tell=False),
-    "disp": _row(_flag, _DRIVEN, "bool, optional", """
+    "disp": _row(_flag, _ALL, "bool, optional", """
         Print a plain progress line every few seconds and at the end, in the words of the
         library's ``ProgressLine`` (iteration, evaluations of the budget, best value, spread,
         time; failures when any; default False).""", ask_tell=False),

@@ -285,15 +285,11 @@ def _stopped_result(
     return result
 
 
-def _paper_result(
-    raw: dict[str, Any],
-    final_value: Optional[float],
-    callback_stop: Optional[str] = None,
-    checkpoint: Optional[str] = None,
-) -> OptimizeResult:
-    """The paper loop's result from the raw results of the Rust side; ``final_value`` is
-    ``fun`` at the final ``x`` when evaluated (else ``fun`` is the last iteration's mean);
-    ``callback_stop`` how the callback stopped the run; ``checkpoint`` the run's file."""
+def _paper_result(raw: dict[str, Any], final_value: Optional[float]) -> OptimizeResult:
+    """The paper loop's result from the raw results of the Rust side (a run that completed
+    its iterations, or the state of one stopped early: :func:`_stopped_result` writes its
+    ending); ``final_value`` is ``fun`` at the final ``x`` when evaluated (else ``fun`` is the
+    last iteration's mean)."""
     history = History(
         sigma=raw["sigma"],
         grad_norm=raw["grad_norm"],
@@ -309,20 +305,8 @@ def _paper_result(
         nfev += 1
     else:
         value = float(history.fun[-1]) if len(history) else math.nan
-    if raw["stopped_by_callback"]:
-        ending, message = "callback", _callback_message(callback_stop, nit)
-    else:
-        ending = "iterations done"
-        message = (
-            f"completed {nit} iterations "
-            "(the iteration limit: the paper's loop does not test for convergence)"
-        )
-    restored = int(raw.get("restored", 0))
-    if restored and restored == nit:
-        message = f"restored from the finished checkpoint {checkpoint}: {message}"
-    elif restored:
-        message = f"continued from the checkpoint {checkpoint} at iteration {restored}: {message}"
-    success, status = _ENDINGS[ending]
+    message = f"completed {nit} iterations (the iteration limit: the paper's loop does not test for convergence)"
+    success, status = _ENDINGS["iterations done"]
     return OptimizeResult(
         x=raw["x"],
         fun=value,
@@ -332,7 +316,7 @@ def _paper_result(
         status=status,
         message=message,
         history=history,
-        from_checkpoint=restored > 0,
+        from_checkpoint=False,
     )
 
 

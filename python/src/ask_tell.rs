@@ -3,8 +3,9 @@
 //! asked points wherever it likes and tells their values back.
 
 use super::*;
+use plateau_free::baseline::Baseline;
 use plateau_free::lifecycle::AskAndTell;
-use plateau_free::{Ask, AskTell as RsAskTell, PaperAskTell, Points};
+use plateau_free::{Ask, AskTell as RsAskTell, Points};
 
 /// The run behind `plateau_free.AskTell`: `plateau_free::Minimizer`'s adaptive search, or the paper's
 /// loop as `plateau_free.minimize(method='plateau')` runs it (its final evaluation included).
@@ -29,7 +30,7 @@ pub(crate) enum Run {
 /// The paper's loop, its per-iteration records and its final evaluation.
 #[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Paper {
-    run: PaperAskTell,
+    run: Loop,
     seed: u64,
     record_x: bool,
     /// The iterations `record` keeps (the last ones).
@@ -177,7 +178,7 @@ impl Run {
     pub(crate) fn identity(&self) -> Vec<(&'static str, String)> {
         match self {
             Run::Adaptive(run) => AskAndTell::identity(&**run),
-            Run::Paper(p) => AskAndTell::identity(&p.run),
+            Run::Paper(p) => p.run.identity(),
         }
     }
 
@@ -298,28 +299,65 @@ impl PyAskTell {
             .orthogonal(orthogonal)
             .seed(seed)
             .on_failure(estimate_on_failure(on_failure)?);
-        let optimizer = Optimizer::new(adam.inner.lock(py)?.clone(), annealer.inner)
-            .record_theta(false)
-            // The records are `Record`'s (of `keep` iterations): the library's own history
-            // keeps the last iteration alone.
-            .keep_history(HistoryKeep::Last(1))
-            .iterations(iterations);
+        let optimizer = paper_optimizer(py, &adam, &annealer, iterations)?;
         let run = optimizer.ask_tell(grad, &theta).map_err(value_error)?;
-        Ok(PyAskTell {
-            run: Guarded::new(Run::Paper(Box::new(Paper {
-                run,
-                seed,
-                record_x,
-                keep,
-                final_evaluation,
-                record: Record::default(),
-                final_asked: false,
-                final_value: None,
-                final_point: Vec::new(),
-                final_seed: [seed],
-            }))),
+        let ends = Ends {
+            seed,
+            record_x,
+            keep,
+            final_evaluation,
+        };
+        Ok(PyAskTell::paper_run(
+            Loop::Gaussian(Box::new(run)),
+            ends,
             shape,
-        })
+        ))
+    }
+
+    /// The paper's loop with a baseline estimator (`plateau_free.minimize(method='fd')`,
+    /// `'spsa'`) from `x0`: `baseline` is `'fd'` (central differences of `step`) or `'spsa'`.
+    #[staticmethod]
+    #[pyo3(signature = (x0, adam, annealer, iterations, baseline, step=1e-3, seed=0, record_x=false, final_evaluation=true, keep_history=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn baseline(
+        py: Python<'_>,
+        x0: &Bound<'_, PyAny>,
+        adam: PyRef<'_, PyAdam>,
+        annealer: PyRef<'_, PyAnnealer>,
+        iterations: usize,
+        baseline: &str,
+        step: f64,
+        seed: u64,
+        record_x: bool,
+        final_evaluation: bool,
+        keep_history: Option<usize>,
+    ) -> PyResult<Self> {
+        let kind = match baseline {
+            "fd" => Baseline::FiniteDifference { step },
+            "spsa" => Baseline::Spsa,
+            _ => {
+                return Err(PyValueError::new_err(format!(
+                    "baseline = '{baseline}' is not one: use 'fd' or 'spsa'"
+                )))
+            }
+        };
+        let keep = keep_history.unwrap_or(HistoryKeep::DEFAULT_LAST);
+        let (theta, shape) = to_vector(py, x0, "x0")?;
+        let optimizer = paper_optimizer(py, &adam, &annealer, iterations)?;
+        let run = optimizer
+            .ask_tell_baseline(kind, seed, &theta)
+            .map_err(value_error)?;
+        let ends = Ends {
+            seed,
+            record_x,
+            keep,
+            final_evaluation,
+        };
+        Ok(PyAskTell::paper_run(
+            Loop::Baseline(Box::new(run)),
+            ends,
+            shape,
+        ))
     }
 
     /// `(X, seeds)`: the next points, shape `(k, *x0.shape)`, and their uint64 seeds; None
@@ -428,6 +466,49 @@ impl PyAskTell {
             }
         }
         Ok(Some(out))
+    }
+}
+
+/// The paper loop's optimiser for `_AskTell`: its records are `Record`'s (of `keep`
+/// iterations), so the library's own history keeps the last iteration alone.
+fn paper_optimizer(
+    py: Python<'_>,
+    adam: &PyAdam,
+    annealer: &PyAnnealer,
+    iterations: usize,
+) -> PyResult<Optimizer> {
+    Ok(Optimizer::new(adam.inner.lock(py)?.clone(), annealer.inner)
+        .record_theta(false)
+        .keep_history(HistoryKeep::Last(1))
+        .iterations(iterations))
+}
+
+/// What a paper loop's run does around the loop: its seed (of the final evaluation), the
+/// records it keeps, whether `fun` is evaluated once more at the end.
+struct Ends {
+    seed: u64,
+    record_x: bool,
+    keep: usize,
+    final_evaluation: bool,
+}
+
+impl PyAskTell {
+    fn paper_run(run: Loop, ends: Ends, shape: Vec<usize>) -> PyAskTell {
+        PyAskTell {
+            run: Guarded::new(Run::Paper(Box::new(Paper {
+                run,
+                seed: ends.seed,
+                record_x: ends.record_x,
+                keep: ends.keep,
+                final_evaluation: ends.final_evaluation,
+                record: Record::default(),
+                final_asked: false,
+                final_value: None,
+                final_point: Vec::new(),
+                final_seed: [ends.seed],
+            }))),
+            shape,
+        }
     }
 }
 

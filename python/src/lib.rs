@@ -2,11 +2,11 @@
 //! `minimize`, `Sampling` and the result types) by the Python package `plateau_free`
 //! (`python/plateau_free/__init__.py`, the code in `python/plateau_free/_minimize.py` and beside it).
 //!
-//! How a Python objective runs. `plateau_free.minimize`'s adaptive, polished and paper runs are
-//! the library's ask-and-tell state machines (`_AskTell`), asked and told by the Python driver
-//! (`python/plateau_free/_drive.py`), which evaluates the points where `workers` says and owns
-//! failures, Ctrl-C, progress and checkpoints. The estimators and the baselines' loop
-//! (`_minimize`) compute with the GIL released ([`Python::detach`]); each call of `fun`
+//! How a Python objective runs. Every `plateau_free.minimize` run is one of the library's
+//! ask-and-tell state machines (`_AskTell`), driven by the library's `lifecycle::Driver`
+//! (`drive.rs`: failures, Ctrl-C, progress, history, checkpoints), with the asked points
+//! evaluated by Python (`python/plateau_free/_evaluate.py`) where `workers` says. The
+//! estimators called directly compute with the GIL released ([`Python::detach`]); each call of `fun`
 //! re-attaches, checks for pending signals (so Ctrl-C stops a run within one call of `fun`),
 //! builds one numpy array for the point (or one `(N, n)` array for a whole batch, copied in a
 //! single `memcpy`), calls `fun` and reads the value. The first exception raised by `fun` is
@@ -18,7 +18,6 @@
 //! object from several threads run one at a time, and a thread waiting for the lock never
 //! holds the GIL that the thread holding it needs to call `fun`.
 
-use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
@@ -31,7 +30,7 @@ use plateau_free::{
     Minimizer as RsMinimizer, Minimum as RsMinimum, Objective, Optimizer,
     PlateauFreeGradient as RsPlateauFreeGradient, Points, Sampling, Schedule, Stop, Strategy,
 };
-use pyo3::exceptions::{PyKeyboardInterrupt, PyTypeError, PyValueError};
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyFloat, PyInt, PyString, PyTuple, PyType};
 
@@ -42,8 +41,9 @@ mod drive;
 mod estimators;
 mod least_squares;
 mod locking;
+mod loops;
 mod objective;
-mod paper_loop;
+mod record;
 mod reference;
 mod schedule;
 
@@ -53,8 +53,9 @@ use convert::*;
 use estimators::*;
 use least_squares::*;
 use locking::*;
+use loops::*;
 use objective::*;
-use paper_loop::*;
+use record::*;
 use reference::*;
 use schedule::*;
 
@@ -89,7 +90,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyAdam>()?;
     m.add_class::<PyAskTell>()?;
     m.add_class::<PyLeastSquares>()?;
-    m.add_function(wrap_pyfunction!(_minimize, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_reference_estimates, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_reference_minimize, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_reference_minimize_adaptive, m)?)?;

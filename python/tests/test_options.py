@@ -41,7 +41,8 @@ VALUES = dict(
     patience=2, args=(1,), on_failure="raise",
 )  # fmt: skip
 # Options that every method takes.
-EVERY = {"budget", "bounds", "callback", "checkpoint", "checkpoint_every", "keep_history", "args"}
+EVERY = {"budget", "bounds", "callback", "checkpoint", "checkpoint_every", "keep_history", "args",
+         "workers", "disp"}
 TAKES = {
     "adaptive": EVERY | {"sigma0", "target", "population", "restarts", "stop_when_stalled",
                          "workers", "disp", "patience", "on_failure"},
