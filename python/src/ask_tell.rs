@@ -290,7 +290,6 @@ impl PyAskTell {
         keep_history: Option<usize>,
         on_failure: &str,
     ) -> PyResult<Self> {
-        let keep = keep_history.unwrap_or(HistoryKeep::DEFAULT_LAST);
         let (theta, shape) = to_vector(py, x0, "x0")?;
         let grad = RsPlateauFreeGradient::without_objective()
             .samples(samples)
@@ -301,12 +300,7 @@ impl PyAskTell {
             .on_failure(estimate_on_failure(on_failure)?);
         let optimizer = paper_optimizer(py, &adam, &annealer, iterations)?;
         let run = optimizer.ask_tell(grad, &theta).map_err(value_error)?;
-        let ends = Ends {
-            seed,
-            record_x,
-            keep,
-            final_evaluation,
-        };
+        let ends = Ends::new(seed, record_x, final_evaluation, keep_history);
         Ok(PyAskTell::paper_run(
             Loop::Gaussian(Box::new(run)),
             ends,
@@ -341,18 +335,12 @@ impl PyAskTell {
                 )))
             }
         };
-        let keep = keep_history.unwrap_or(HistoryKeep::DEFAULT_LAST);
         let (theta, shape) = to_vector(py, x0, "x0")?;
         let optimizer = paper_optimizer(py, &adam, &annealer, iterations)?;
         let run = optimizer
             .ask_tell_baseline(kind, seed, &theta)
             .map_err(value_error)?;
-        let ends = Ends {
-            seed,
-            record_x,
-            keep,
-            final_evaluation,
-        };
+        let ends = Ends::new(seed, record_x, final_evaluation, keep_history);
         Ok(PyAskTell::paper_run(
             Loop::Baseline(Box::new(run)),
             ends,
@@ -490,6 +478,17 @@ struct Ends {
     record_x: bool,
     keep: usize,
     final_evaluation: bool,
+}
+
+impl Ends {
+    fn new(seed: u64, record_x: bool, final_evaluation: bool, keep: Option<usize>) -> Ends {
+        Ends {
+            seed,
+            record_x,
+            keep: keep.unwrap_or(HistoryKeep::DEFAULT_LAST),
+            final_evaluation,
+        }
+    }
 }
 
 impl PyAskTell {

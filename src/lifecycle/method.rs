@@ -275,13 +275,7 @@ macro_rules! paper_loop {
             }
 
             fn so_far(&self) -> History {
-                let mut history = self.history().clone();
-                history.stopped_early = !self.is_done();
-                if history.theta.is_empty() {
-                    history.theta.push(self.theta().to_vec());
-                }
-                self.optimizer().trim_exact(&mut history);
-                history
+                <$run>::so_far(self)
             }
 
             fn identity(&self) -> Vec<(&'static str, String)> {

@@ -254,15 +254,12 @@ impl BaselineAskTell {
 
     /// Ends the run where it stands: the [`History`] that [`Optimizer::minimize`] returns.
     pub fn finish(self) -> History {
-        let stopped_early = !self.is_done();
-        let Progress {
-            theta, mut history, ..
-        } = self.progress;
-        history.stopped_early = stopped_early;
-        if history.theta.is_empty() {
-            history.theta.push(theta);
-        }
-        self.optimizer.trim_exact(&mut history);
-        history
+        self.optimizer.ended(self.progress)
+    }
+
+    /// The history as it stands, for a run ended early ([`BaselineAskTell::finish`] without
+    /// the end).
+    pub(crate) fn so_far(&self) -> History {
+        self.optimizer.ended(self.progress.clone())
     }
 }

@@ -267,6 +267,22 @@ impl Optimizer {
         }
     }
 
+    /// The history of a run ended at `progress`: its last theta the point the run ended at,
+    /// `stopped_early` if iterations remained, trimmed to what [`Optimizer::keep_history`]
+    /// keeps.
+    pub(crate) fn ended(&self, progress: Progress) -> History {
+        let stopped_early = self.next_sigma(&progress).is_some();
+        let Progress {
+            theta, mut history, ..
+        } = progress;
+        history.stopped_early = stopped_early;
+        if history.theta.is_empty() {
+            history.theta.push(theta);
+        }
+        self.trim_exact(&mut history);
+        history
+    }
+
     /// Trims a history that a run hands back to exactly what [`Optimizer::keep_history`] keeps.
     pub(crate) fn trim_exact(&self, history: &mut History) {
         history.trim(self.keep, true);
