@@ -6,8 +6,8 @@ use crate::{fresh, results, run, run_in};
 /// A run stopped after k iterations (the Ctrl-C path, through the hidden `--stop-after`)
 /// exits 130 with its outputs written and marked interrupted, prints the command that
 /// resumes; continued with `--resume`, it ends bit-identical to the run left alone: for the
-/// paper's loop with each renderer-seed rule, finite differences, the adaptive search and the
-/// polished loop (stopped inside the loop; the polish runs after the resume).
+/// paper's loop with each renderer-seed rule, finite differences, SPSA, the adaptive search
+/// and the polished loop (stopped inside the loop; the polish runs after the resume).
 #[test]
 fn an_interrupted_run_resumed_equals_the_run_left_alone() {
     for (tag, extra) in [
@@ -17,6 +17,7 @@ fn an_interrupted_run_resumed_equals_the_run_left_alone() {
             &["--iterations", "12", "--crn", "pair", "--method", "plateau"][..],
         ),
         ("fd", &["--iterations", "6", "--method", "fd"][..]),
+        ("spsa", &["--iterations", "6", "--method", "spsa"][..]),
         (
             "adaptive",
             &[
@@ -288,7 +289,7 @@ fn bad_checkpoints_are_refused_before_any_work() {
             "format 7",
         ),
         (
-            good.replacen("\"executable\":\"", "\"executable\":\"0", 1),
+            good.replacen("[\"executable\",\"", "[\"executable\",\"0", 1),
             vec![],
             "another build",
         ),
