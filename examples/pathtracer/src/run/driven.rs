@@ -278,6 +278,14 @@ impl AskAndTell for Tracked<'_> {
         }
     }
 
+    fn failures(&self) -> usize {
+        match &self.saved.progress {
+            Progress::Adaptive(search) => AskAndTell::failures(&**search),
+            Progress::Image(m) => AskAndTell::failures(&**m),
+            _ => 0,
+        }
+    }
+
     fn finish(self) -> Result<Finished, Error> {
         Ok(self.output(false))
     }

@@ -103,12 +103,12 @@ pub fn optimize_with(task: &Task, s: &Settings, ctl: Control<'_>) -> Result<Outc
     let (start, target) = (task.start(), task.target());
     let progress = match s.method {
         Method::Adaptive | Method::Polished => {
-            Progress::Adaptive(adaptive::search(task, s, &start)?)
+            Progress::Adaptive(Box::new(adaptive::search(task, s, &start)?))
         }
         Method::Image if ctl.resume.is_some() => {
             return Err("--method image supports no --resume (it keeps no checkpoint)".into())
         }
-        Method::Image => Progress::Image(image::least_squares(task, s, &start)?),
+        Method::Image => Progress::Image(Box::new(image::least_squares(task, s, &start)?)),
         Method::Plateau | Method::Fd | Method::Spsa => paper::progress(task, s, &start)?,
     };
     let reference = task.render(&target, s.seed, s.spp, view);

@@ -24,9 +24,8 @@ pub(super) fn progress(task: &Task, s: &Settings, start: &[f64]) -> Result<Progr
         .sampling(s.sampling)
         .antithetic(s.antithetic)
         .seed(s.seed);
-    Ok(Progress::Loop(
-        loop_optimizer(task, s)?.ask_tell(gradient, start)?,
-    ))
+    let run = loop_optimizer(task, s)?.ask_tell(gradient, start)?;
+    Ok(Progress::Loop(Box::new(run)))
 }
 
 /// Adam (projected onto the task's box, if it has one) under the paper's annealing schedule

@@ -42,15 +42,15 @@ pub const FILE: &str = "checkpoint.json";
 #[serde(rename_all = "kebab-case")]
 pub enum Progress {
     /// The paper's loop (`--method plateau`): the library's ask-and-tell loop.
-    Loop(PaperAskTell),
+    Loop(Box<PaperAskTell>),
     /// Finite differences and SPSA: the loop's state (their estimators evaluate in the
     /// library's callback form, an iteration at a time).
     Baseline(OptimizerState),
     /// The adaptive search and the polished loop: the library's ask-and-tell run.
-    Adaptive(AskTell),
+    Adaptive(Box<AskTell>),
     /// The image method: never saved (a run of it starts over).
     #[serde(skip)]
-    Image(LeastSquaresAskTell),
+    Image(Box<LeastSquaresAskTell>),
 }
 
 /// The state of `checkpoint.json`, after the library's header line.
