@@ -160,7 +160,7 @@ impl Checkpoint {
 
 /// The fuzzers' one body, shared by the cargo-fuzz target (`fuzz/fuzz_targets/checkpoint.rs`)
 /// and the bounded run in the ordinary tests (`tests/checkpoint.rs`): the loader on `bytes`
-/// (as the file `fuzz/checkpoint.json`), then what `--resume` does with a checkpoint that
+/// (as the state of the file `fuzz/checkpoint.json`, after the library's header), then what `--resume` does with a checkpoint that
 /// loads. Returns whether it loaded; panics (the fuzzers' crash) when the contract breaks:
 ///
 /// - the loader never panics, and refuses with one line naming the file;
