@@ -4,21 +4,15 @@
 //! the history, the progress strip's points, every value told, the renders, the times), so
 //! that the library's driver runs it, its checkpoint saves and resumes it whole (the
 //! identity adds the task, the settings and the build), and its observers show it.
-//!
-//! Finite differences and SPSA have no ask-and-tell form in the library: their ask holds no
-//! point, and their tell runs one iteration of the library's callback form
-//! ([`plateau_free::Optimizer::minimize_from`]), rendering through the loss.
 
 use std::cell::Cell;
-use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
-use plateau_free::baseline::{FiniteDifference, Spsa};
 use plateau_free::lifecycle::AskAndTell;
-use plateau_free::{Ask, Error, GradientEstimator, OptimizerState, Points, Seeded};
+use plateau_free::{Ask, Error, History};
 
 use super::checkpoint::{executable, Checkpoint, Progress};
-use super::{Ended, Method, Row, Settings};
+use super::{Ended, Row, Settings};
 use crate::render::Image;
 use crate::tasks::Task;
 
@@ -90,29 +84,6 @@ impl<'a> Tracked<'a> {
             .is_some_and(|b| c.optimisation_seconds >= b)
     }
 
-    /// One iteration of finite differences or SPSA from `state`, in the library's callback
-    /// form; the iteration's theta, spread and mean value, or `None` when the loop is done.
-    fn baseline_step(
-        ctx: &Ctx<'_>,
-        state: &mut OptimizerState,
-    ) -> Result<Option<(Vec<f64>, f64, f64)>, Error> {
-        let s = ctx.s;
-        let mut estimator: Box<dyn GradientEstimator + '_> = match s.method {
-            Method::Fd => {
-                Box::new(FiniteDifference::new(Seeded(ctx.loss), s.fd_step)?.seed(s.seed))
-            }
-            _ => Box::new(Spsa::new(Seeded(ctx.loss)).seed(s.seed)),
-        };
-        let mut optimizer = super::paper::loop_optimizer(ctx.task, s)?;
-        let mut seen = None;
-        let next = optimizer.minimize_from(&mut *estimator, state.clone(), |step| {
-            seen = Some((step.theta.to_vec(), step.sigma, step.estimate.mean_value));
-            ControlFlow::Break(())
-        });
-        *state = next.map_err(|e| e.error)?;
-        Ok(seen)
-    }
-
     /// The end of the run (`interrupted`: stopped before it, to be continued).
     fn output(&self, interrupted: bool) -> Finished {
         let c = &self.saved;
@@ -123,10 +94,10 @@ impl<'a> Tracked<'a> {
                 run.theta().to_vec(),
                 false,
             ),
-            Progress::Baseline(state) => (
-                state.iteration,
-                state.history.evaluations,
-                state.theta.clone(),
+            Progress::Baseline(run) => (
+                run.iteration(),
+                run.history().evaluations,
+                run.theta().to_vec(),
                 false,
             ),
             Progress::Adaptive(search) => match search.result() {
@@ -181,10 +152,8 @@ impl AskAndTell for Tracked<'_> {
         let ask = match &mut self.saved.progress {
             Progress::Loop(run) => run.ask()?,
             Progress::Adaptive(search) => search.ask()?,
+            Progress::Baseline(run) => run.ask()?,
             Progress::Image(m) => m.ask()?,
-            Progress::Baseline(state) => {
-                Some(Ask::try_new(Points::new(&[], state.theta.len()), &[])?)
-            }
         };
         match ask {
             None => {
@@ -207,18 +176,12 @@ impl AskAndTell for Tracked<'_> {
             Progress::Loop(run) => {
                 let before = run.iteration();
                 run.tell(values)?;
-                (run.iteration() > before).then(|| {
-                    let sigma = run.history().sigma.last().copied().unwrap_or(f64::NAN);
-                    let loss = run.last_estimate().map_or(f64::NAN, |e| e.mean_value);
-                    (run.theta().to_vec(), sigma, loss)
-                })
+                (run.iteration() > before)
+                    .then(|| step(run.history(), run.theta(), run.last_estimate()))
             }
-            Progress::Baseline(state) => {
-                let step = Tracked::baseline_step(ctx, state)?;
-                if step.is_none() || state.iteration >= ctx.s.iterations {
-                    self.saved.finished = true;
-                }
-                step
+            Progress::Baseline(run) => {
+                run.tell(values)?;
+                Some(step(run.history(), run.theta(), run.last_estimate()))
             }
             Progress::Adaptive(search) => {
                 search.tell(values)?;
@@ -324,4 +287,16 @@ impl AskAndTell for Tracked<'_> {
         self.ctx.render_time.set(seconds);
         Ok(())
     }
+}
+
+/// A completed iteration of the paper's loop: theta after its step, the spread it estimated
+/// with, its estimate's mean value.
+fn step(
+    history: &History,
+    theta: &[f64],
+    estimate: Option<&plateau_free::Estimate>,
+) -> (Vec<f64>, f64, f64) {
+    let sigma = history.sigma.last().copied().unwrap_or(f64::NAN);
+    let loss = estimate.map_or(f64::NAN, |e| e.mean_value);
+    (theta.to_vec(), sigma, loss)
 }

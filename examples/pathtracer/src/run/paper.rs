@@ -1,23 +1,30 @@
 //! The paper's loop (`--method plateau`, `fd`, `spsa`): Adam (projected onto the task's box)
-//! under the paper's annealing schedule, with the plateau-free gradient (the library's
-//! ask-and-tell loop, [`plateau_free::PaperAskTell`]) or a baseline estimator (run an
-//! iteration at a time, see [`super::driven`]).
+//! under the paper's annealing schedule, with the plateau-free gradient or a baseline
+//! estimator, as the library's ask-and-tell loops ([`plateau_free::PaperAskTell`],
+//! [`plateau_free::baseline::BaselineAskTell`]).
 
-use plateau_free::{Adam, Annealer, Error, Optimizer, OptimizerState, PlateauFreeGradient};
+use plateau_free::baseline::Baseline;
+use plateau_free::{Adam, Annealer, Error, Optimizer, PlateauFreeGradient};
 
 use super::checkpoint::Progress;
 use super::{Method, Settings};
 use crate::report::Result;
 use crate::tasks::Task;
 
-/// The method's run from `start`: the library's ask-and-tell loop for the plateau-free
-/// gradient, the loop's state for finite differences and SPSA.
+/// The method's run from `start`: the library's ask-and-tell loop with the plateau-free
+/// gradient, finite differences or SPSA.
 ///
 /// # Errors
 /// Settings that Adam, the annealer or the estimator reject, a start outside the box.
 pub(super) fn progress(task: &Task, s: &Settings, start: &[f64]) -> Result<Progress> {
-    if s.method != Method::Plateau {
-        return Ok(Progress::Baseline(OptimizerState::new(start)?));
+    let baseline = match s.method {
+        Method::Fd => Some(Baseline::FiniteDifference { step: s.fd_step }),
+        Method::Spsa => Some(Baseline::Spsa),
+        _ => None,
+    };
+    if let Some(baseline) = baseline {
+        let run = loop_optimizer(task, s)?.ask_tell_baseline(baseline, s.seed, start)?;
+        return Ok(Progress::Baseline(Box::new(run)));
     }
     let gradient = PlateauFreeGradient::without_objective()
         .samples(s.samples)

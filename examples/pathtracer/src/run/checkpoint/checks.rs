@@ -78,10 +78,7 @@ impl Checkpoint {
         }
         let (dim, iteration) = match &self.progress {
             Progress::Loop(run) => (run.theta().len(), run.iteration()),
-            Progress::Baseline(state) => {
-                state.validate().map_err(|e| e.to_string())?;
-                (state.theta.len(), state.iteration)
-            }
+            Progress::Baseline(run) => (run.theta().len(), run.iteration()),
             Progress::Adaptive(search) => {
                 self.check_search(search)?;
                 (search.dim(), done)

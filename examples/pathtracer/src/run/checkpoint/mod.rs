@@ -7,7 +7,7 @@
 //! What the state holds: the task, the settings asked for on the command line and those the
 //! run uses (they differ only when `--budget` planned them), the method (the library's
 //! `PaperAskTell` for the paper's loop, `AskTell` for the adaptive search and the polished
-//! loop, the loop's `OptimizerState` for finite differences and SPSA), the history so far,
+//! loop, `BaselineAskTell` for finite differences and SPSA), the history so far,
 //! the progress strip's points, every value told (for the stop rule's study), the renders and
 //! the times spent. The identity adds the executable's hash: a run continued by another build
 //! could differ in any bit (a changed renderer, estimator or compiler), and nothing short of
@@ -29,7 +29,8 @@ pub use error::CheckpointError;
 
 use std::path::Path;
 
-use plateau_free::{AskTell, LeastSquaresAskTell, OptimizerState, PaperAskTell};
+use plateau_free::baseline::BaselineAskTell;
+use plateau_free::{AskTell, LeastSquaresAskTell, PaperAskTell};
 use serde::{Deserialize, Serialize};
 
 use super::{Row, Settings};
@@ -43,9 +44,8 @@ pub const FILE: &str = "checkpoint.json";
 pub enum Progress {
     /// The paper's loop (`--method plateau`): the library's ask-and-tell loop.
     Loop(Box<PaperAskTell>),
-    /// Finite differences and SPSA: the loop's state (their estimators evaluate in the
-    /// library's callback form, an iteration at a time).
-    Baseline(OptimizerState),
+    /// Finite differences and SPSA: the library's ask-and-tell loop with a baseline.
+    Baseline(Box<BaselineAskTell>),
     /// The adaptive search and the polished loop: the library's ask-and-tell run.
     Adaptive(Box<AskTell>),
     /// The image method: never saved (a run of it starts over).
