@@ -159,9 +159,47 @@ impl Checkpoint {
     /// [`Error::Checkpoint`] for a file that cannot be read or is damaged, or of another
     /// format or library version; [`Error::CheckpointMismatch`] for another run's file.
     pub fn read<M: AskAndTell>(&self, run: &mut M) -> Result<bool, Error> {
-        let bytes = match std::fs::read(&self.path) {
+        let Some((identity, state)) = self.read_state()? else {
+            return Ok(false);
+        };
+        self.compare(&identity, &run.identity())?;
+        run.restore(&state)
+            .map(|()| true)
+            .map_err(|e| self.error(inner_reason(e)))
+    }
+
+    /// The file's settings ([`AskAndTell::identity`], as saved) and the run's state (the
+    /// bytes of [`AskAndTell::save`]), after the checks of the file's format, library
+    /// version and checksum but with no run to compare with: to look into a checkpoint
+    /// (which run it holds, how far it went) before making the run that resumes it. `None`
+    /// when the file does not exist.
+    ///
+    /// ```
+    /// use plateau_free::lifecycle::{AskAndTell, Checkpoint, Driver};
+    /// use plateau_free::Minimizer;
+    ///
+    /// let path = std::env::temp_dir().join(format!("plateau-free-state-{}.json", std::process::id()));
+    /// let checkpoint = Checkpoint::new(&path);
+    /// assert!(checkpoint.read_state()?.is_none());
+    /// let m = Minimizer::new(|x: &[f64]| x[0] * x[0]).budget(40).seed(5);
+    /// m.run_with(&[1.0], Driver::new().checkpoint(Checkpoint::new(&path)))?;
+    /// let (identity, state) = checkpoint.read_state()?.unwrap();
+    /// assert!(identity.contains(&("seed".to_string(), "5".to_string())));
+    /// let mut run = Minimizer::without_objective().budget(40).seed(5).ask_tell(&[1.0])?;
+    /// run.restore(&state)?;
+    /// assert_eq!(AskAndTell::evaluations(&run), 40);
+    /// std::fs::remove_file(&path)?;
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`Error::Checkpoint`] for a file that cannot be read, is damaged (its header, or a
+    /// state that does not match its checksum), or of another format or library version.
+    #[allow(clippy::type_complexity)]
+    pub fn read_state(&self) -> Result<Option<(Vec<(String, String)>, Vec<u8>)>, Error> {
+        let mut bytes = match std::fs::read(&self.path) {
             Ok(bytes) => bytes,
-            Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(false),
+            Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
             Err(e) => return Err(self.error(format!("cannot be read: {e}"))),
         };
         let cut = bytes
@@ -182,14 +220,11 @@ impl Checkpoint {
             );
             return Err(self.error(why));
         }
-        self.compare(&header.identity, &run.identity())?;
-        let state = bytes.get(cut + 1..).unwrap_or_default();
-        if checksum(state) != header.checksum {
+        bytes.drain(..(cut + 1).min(bytes.len()));
+        if checksum(&bytes) != header.checksum {
             return Err(self.error("damaged: the state does not match its checksum".into()));
         }
-        run.restore(state)
-            .map(|()| true)
-            .map_err(|e| self.error(inner_reason(e)))
+        Ok(Some((header.identity, bytes)))
     }
 
     /// The first setting of `given` that `saved` has otherwise.

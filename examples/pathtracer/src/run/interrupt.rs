@@ -1,6 +1,6 @@
-//! Ctrl-C: the first SIGINT triggers the library's [`Interrupt`], and the running loop stops
-//! after its current iteration (it then writes its checkpoint and outputs); a second one
-//! exits at once with code 130.
+//! Ctrl-C: the first SIGINT triggers the library's [`Interrupt`], and the run's driver stops
+//! it after its current iteration (the run then writes its checkpoint and outputs); a second
+//! one exits at once with code 130.
 //!
 //! The interrupt is process-wide and triggered only by the handler the command line
 //! installs ([`install_handler`]); library callers and tests stop a run with
@@ -16,11 +16,6 @@ pub const EXIT_CODE: i32 = 130;
 
 /// The process's interrupt, which Ctrl-C triggers.
 static CTRL_C: LazyLock<Interrupt> = LazyLock::new(Interrupt::new);
-
-/// The interrupt that Ctrl-C triggers (a clone: they share one flag).
-pub fn ctrl_c() -> Interrupt {
-    CTRL_C.clone()
-}
 
 /// Whether Ctrl-C has been pressed (once).
 pub fn requested() -> bool {

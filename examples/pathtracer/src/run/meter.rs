@@ -10,11 +10,11 @@
 //! the objective. The line's spacing is [`LINE_SECONDS`], or the seconds in the environment
 //! variable [`LINE_SECONDS_VAR`] (0: a line after every iteration).
 
-use std::cell::Cell;
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
+use plateau_free::lifecycle::{Observer, Progress};
 
 /// Seconds between two plain progress lines: the library's [`plateau_free::lifecycle::ProgressLine`] spacing.
 pub const LINE_SECONDS: f64 = plateau_free::lifecycle::PROGRESS_SECONDS;
@@ -41,27 +41,18 @@ impl Unit {
     }
 }
 
-/// Where a run is, after an iteration.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct At {
-    /// Iterations done.
-    pub iterations: usize,
-    /// Renders of the objective so far.
-    pub renders: usize,
-    /// The iteration's loss (the lowest seen is shown).
-    pub loss: f64,
-}
-
 /// The plain line's state.
 struct Line {
     name: String,
     every: Duration,
     clock: Instant,
-    last: Cell<Instant>,
-    best: Cell<f64>,
+    last: Instant,
+    best: f64,
 }
 
-/// A run's progress: a bar on a terminal, plain lines elsewhere, nothing if not shown.
+/// A run's progress, shown by the library's driver after every iteration
+/// ([`Observer`]: the iteration, the renders, the best value and the spread it reports): a
+/// bar on a terminal, plain lines elsewhere, nothing if not shown.
 pub(super) struct Meter {
     bar: ProgressBar,
     line: Option<Line>,
@@ -82,8 +73,8 @@ impl Meter {
             name: name.into(),
             every: line_spacing(),
             clock: Instant::now(),
-            last: Cell::new(Instant::now()),
-            best: Cell::new(f64::INFINITY),
+            last: Instant::now(),
+            best: f64::INFINITY,
         });
         Meter {
             bar,
@@ -92,28 +83,23 @@ impl Meter {
             total,
         }
     }
+}
 
-    /// Moves the bar to `position` (of its unit) without a line: a resumed run's start.
-    pub(super) fn set_position(&self, position: usize) {
-        self.bar.set_position(position as u64);
-    }
-
-    /// Shows the run at `at`, with `message` beside the bar.
-    pub(super) fn update(&self, at: At, message: String) {
+impl Observer for Meter {
+    fn observe(&mut self, p: &Progress) {
         let position = match self.unit {
-            Unit::Iterations => at.iterations,
-            Unit::Renders => at.renders,
+            Unit::Iterations => p.iteration,
+            Unit::Renders => p.evaluations,
         };
         self.bar.set_position(position as u64);
-        self.bar.set_message(message);
-        let Some(line) = &self.line else { return };
-        if at.loss < line.best.get() {
-            line.best.set(at.loss);
-        }
-        if line.last.get().elapsed() < line.every {
+        self.bar
+            .set_message(format!("best {:.3e}  sigma {:.3}", p.best, p.sigma));
+        let Some(line) = &mut self.line else { return };
+        line.best = line.best.min(p.best);
+        if line.last.elapsed() < line.every {
             return;
         }
-        line.last.set(Instant::now());
+        line.last = Instant::now();
         let of = |unit| {
             if unit == self.unit {
                 format!("/{}", self.total)
@@ -124,17 +110,16 @@ impl Meter {
         eprintln!(
             "{}: iteration {}{}, renders {}{}, best loss {:.3e}, elapsed {:.0} s",
             line.name,
-            at.iterations,
+            p.iteration,
             of(Unit::Iterations),
-            at.renders,
+            p.evaluations,
             of(Unit::Renders),
-            line.best.get(),
+            line.best,
             line.clock.elapsed().as_secs_f64()
         );
     }
 
-    /// Clears the bar.
-    pub(super) fn finish(&self) {
+    fn end(&mut self, _progress: &Progress) {
         self.bar.finish_and_clear();
     }
 }

@@ -1,17 +1,20 @@
-//! One optimisation of a task: the reference, the method's loop, its progress, and the
-//! outputs.
+//! One optimisation of a task: the reference, the method, its progress, and the outputs.
 //!
 //! [`optimize`] reads as its steps: render the reference and the start, build the loss, run
-//! the method, measure the end, write the files. The methods: the paper's loop in `paper.rs`,
-//! the library's adaptive search (and polished loop) in `adaptive.rs`, the image method in
-//! `image.rs`. What a run can be told is in `settings.rs`, what it yields in `outcome.rs`,
-//! the files it writes in `outputs.rs`, its progress display in `meter.rs`, the time-budget
-//! planner in `budget.rs`, what an earlier run left in `earlier.rs`, the stop rule replayed on
-//! a finished run in `stall_replay.rs`, Ctrl-C in `interrupt.rs`.
+//! the method under the library's [`Driver`] (its interrupt, observers and checkpoint: the
+//! run's lifecycle is the library's), measure the end, write the files. Every method is one
+//! ask-and-tell run for the driver, wrapped with the path tracer's record in `driven.rs`
+//! (what it records after each tell in `record.rs`): the paper's loop and the baselines in
+//! `paper.rs`, the library's adaptive search (and polished loop) in `adaptive.rs`, the image
+//! method in `image.rs`. What a run can be told is in `settings.rs`, what it yields in
+//! `outcome.rs`, the files it writes in `outputs.rs`, its progress display in `meter.rs`, the
+//! time-budget planner in `budget.rs`, what an earlier run left in `earlier.rs`, the stop rule
+//! replayed on a finished run in `stall_replay.rs`, Ctrl-C in `interrupt.rs`.
 
 mod adaptive;
 mod budget;
 pub mod checkpoint;
+mod driven;
 mod earlier;
 mod image;
 pub mod interrupt;
@@ -19,6 +22,7 @@ mod meter;
 mod outcome;
 mod outputs;
 mod paper;
+mod record;
 mod settings;
 mod stall_replay;
 
@@ -26,8 +30,10 @@ use std::cell::Cell;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use plateau_free::lifecycle::{Driver, Interrupt, Observer, Progress as Seen};
+
 pub use budget::{plan_for_budget, plan_with_render_time};
-pub use checkpoint::{Build, Checkpoint, CheckpointError, Every, Progress};
+pub use checkpoint::{Checkpoint, CheckpointError, Every, Progress};
 pub use earlier::Earlier;
 pub use meter::{LINE_SECONDS, LINE_SECONDS_VAR};
 pub use outcome::{loop_renders, renders_to, write_history, Outcome, Row, Summary};
@@ -40,6 +46,8 @@ pub use stall_replay::{replay as replay_stall, Replayed};
 use crate::render::Image;
 use crate::report::Result;
 use crate::tasks::Task;
+use driven::{Ctx, Finished, Tracked};
+use meter::{Meter, Unit};
 
 /// Runs one optimisation of `task`, writing its outputs into `out` if given (no checkpoint,
 /// never interrupted: [`optimize_with`] has those).
@@ -83,52 +91,48 @@ pub struct Control<'a> {
     pub progress: bool,
 }
 
-/// Runs one optimisation of `task` under `ctl`: with a checkpoint every so often and at the
-/// end, continuing `ctl.resume` if given, stopping after the current iteration on Ctrl-C
-/// ([`interrupt::requested`]) or at `ctl.stop_after`. An interrupted run writes its
+/// Runs one optimisation of `task` under `ctl`, driven by the library's [`Driver`]: with a
+/// checkpoint every so often and at the end (the library's), continuing `ctl.resume`'s run if
+/// given (else a checkpoint at the path is replaced), stopping after the current iteration
+/// on Ctrl-C ([`interrupt::requested`]) or at `ctl.stop_after`. An interrupted run writes its
 /// checkpoint and its outputs for the iterations done, and says so in its summary
 /// (`interrupted: true`); continued from that checkpoint it ends bit for bit as the run left
 /// alone (timings aside).
 pub fn optimize_with(task: &Task, s: &Settings, ctl: Control<'_>) -> Result<Outcome> {
     let view = s.view();
     let (start, target) = (task.start(), task.target());
+    let progress = match s.method {
+        Method::Adaptive | Method::Polished => {
+            Progress::Adaptive(Box::new(adaptive::search(task, s, &start)?))
+        }
+        Method::Image if ctl.resume.is_some() => {
+            return Err("--method image supports no --resume (it keeps no checkpoint)".into())
+        }
+        Method::Image => Progress::Image(Box::new(image::least_squares(task, s, &start)?)),
+        Method::Plateau | Method::Fd | Method::Spsa => paper::progress(task, s, &start)?,
+    };
     let reference = task.render(&target, s.seed, s.spp, view);
     let initial = task.render(&start, s.seed, s.spp, view);
-
-    let resumed_render = ctl.resume.as_ref().map_or(0.0, |c| c.render_seconds);
-    let render_time = Cell::new(Duration::from_secs_f64(resumed_render));
-    // The paper loop's count of renders goes on from the checkpoint's (the adaptive search
-    // counts its own, replayed values included).
-    let resumed_renders = ctl
-        .resume
-        .as_ref()
-        .and_then(|c| c.history.last())
-        .map_or(0, |r| r.renders);
-    let renders = Cell::new(resumed_renders);
+    let (render_time, renders) = (Cell::new(Duration::ZERO), Cell::new(0));
     let loss = image_loss(task, s, &reference, &render_time, &renders);
-    let saver = Saver {
-        path: ctl.checkpoint.clone(),
-        task: task.name(),
-        requested: ctl.requested.as_ref().unwrap_or(s),
-        s,
-        render_time: &render_time,
-    };
-    let run = Run {
+    let ctx = Ctx {
         task,
         s,
         reference: &reference,
         start: &start,
-        ctl: &ctl,
-        saver: &saver,
+        target: target.clone(),
+        loss: &loss,
+        renders: &renders,
+        render_time: &render_time,
     };
-    let (ended, final_theta, history, snapshots, optimisation_time) =
-        if matches!(s.method, Method::Adaptive | Method::Polished) {
-            adaptive::run(&run, &loss)?
-        } else if s.method == Method::Image {
-            image::run(&run, &render_time)?
-        } else {
-            paper::run(&run, &loss, &renders)?
-        };
+    let fresh = Tracked::new(&ctx, progress, ctl.requested.as_ref().unwrap_or(s));
+    let Finished {
+        ended,
+        theta: final_theta,
+        history,
+        snapshots,
+        time: optimisation_time,
+    } = drive(&ctx, fresh, &ctl)?;
 
     let final_image = task.render(&final_theta, s.seed, s.spp, view);
     let mut summary = summarize(
@@ -165,73 +169,60 @@ pub fn optimize_with(task: &Task, s: &Settings, ctl: Control<'_>) -> Result<Outc
     Ok(outcome)
 }
 
-/// What both loops are handed: the task, the settings, the reference, the start, the
-/// control and the checkpoint writer.
-struct Run<'a> {
-    task: &'a Task,
-    s: &'a Settings,
-    reference: &'a Image,
-    start: &'a [f64],
-    ctl: &'a Control<'a>,
-    saver: &'a Saver<'a>,
-}
-
-impl Run<'_> {
-    /// Whether the run should stop after `done` iterations, as Ctrl-C asks.
-    fn stop_requested(&self, done: usize) -> bool {
-        interrupt::requested() || self.ctl.stop_after.is_some_and(|k| done >= k)
+/// Runs `fresh` under the library's driver: Ctrl-C and `stop_after` end it at the next turn,
+/// the meter shows it, its checkpoint (if any; never the image method's) is written when due
+/// and at the end. The asked points are rendered one after the other, each render on the
+/// renderer's own threads.
+fn drive(ctx: &Ctx<'_>, fresh: Tracked<'_>, ctl: &Control<'_>) -> Result<Finished> {
+    let (task, s) = (ctx.task, ctx.s);
+    let stop = Interrupt::new();
+    let (total, unit) = match s.method {
+        Method::Plateau | Method::Fd | Method::Spsa => (s.iterations, Unit::Iterations),
+        _ => (s.samples.saturating_mul(s.iterations), Unit::Renders),
+    };
+    let mut driver = Driver::new()
+        .interrupt(stop.clone())
+        .observe(Stopper {
+            stop,
+            after: ctl.stop_after,
+        })
+        .observe(Meter::new(task.name(), total, unit, ctl.progress));
+    let saved = !matches!(fresh.saved.progress, Progress::Image(_));
+    if let (Some(path), true) = (&ctl.checkpoint, saved) {
+        if ctl.resume.is_none() {
+            // A new run: the file of an earlier one is replaced, not continued.
+            let _ = std::fs::remove_file(path);
+        }
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)?;
+        }
+        driver = driver.checkpoint(ctl.every.checkpoint(path));
     }
+    let image = s.method == Method::Image;
+    let finished = driver.run(fresh, |_, ask, out| {
+        if image {
+            image::residuals(ctx, ask, out);
+        } else {
+            for ((x, seed), value) in ask.iter().zip(out.iter_mut()) {
+                *value = (ctx.loss)(x, seed);
+            }
+        }
+        Ok::<(), plateau_free::Error>(())
+    });
+    finished.map_err(|failure| failure.error.into())
 }
 
-/// Writes a run's checkpoint (if it has a file), keeping the run going when it cannot: the
-/// last good checkpoint stays whole, and the failure is said on stderr.
-struct Saver<'a> {
-    path: Option<PathBuf>,
-    task: &'a str,
-    requested: &'a Settings,
-    s: &'a Settings,
-    render_time: &'a Cell<Duration>,
+/// Asks the driver to stop the run after the current iteration, on Ctrl-C or once `after`
+/// iterations are done.
+struct Stopper {
+    stop: Interrupt,
+    after: Option<usize>,
 }
 
-impl Saver<'_> {
-    /// Writes the checkpoint of a run at `progress` with `history` and `snapshots`.
-    fn save(
-        &self,
-        finished: bool,
-        progress: Progress,
-        history: &[Row],
-        snapshots: &[Vec<f64>],
-        optimisation_time: Duration,
-    ) {
-        let Some(path) = &self.path else { return };
-        let checkpoint = Checkpoint {
-            format: checkpoint::FORMAT,
-            build: Build::current(),
-            task: self.task.into(),
-            requested: self.requested.clone(),
-            settings: self.s.clone(),
-            finished,
-            progress,
-            history: history.to_vec(),
-            snapshots: snapshots.to_vec(),
-            optimisation_seconds: optimisation_time.as_secs_f64(),
-            render_seconds: self.render_time.get().as_secs_f64(),
-        };
-        let written = path
-            .parent()
-            .map_or(Ok(()), |d| {
-                if d.as_os_str().is_empty() {
-                    Ok(())
-                } else {
-                    std::fs::create_dir_all(d)
-                }
-            })
-            .and_then(|()| checkpoint.save(path));
-        if let Err(e) = written {
-            eprintln!(
-                "warning: checkpoint {} not written ({e}); the run goes on, the previous checkpoint (if any) is kept",
-                path.display()
-            );
+impl Observer for Stopper {
+    fn observe(&mut self, p: &Seen) {
+        if interrupt::requested() || self.after.is_some_and(|k| p.iteration >= k) {
+            self.stop.trigger();
         }
     }
 }

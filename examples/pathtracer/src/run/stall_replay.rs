@@ -49,8 +49,7 @@ pub struct Replayed {
 /// A checkpoint that cannot be read, of an unfinished run, or of a run that did not count
 /// its renders (written before the runs counted: made again, it counts).
 pub fn replay(path: &Path, window: f64) -> Result<Replayed> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let c = Checkpoint::parse_any_build(&bytes, path)?;
+    let c = Checkpoint::load_any_build(path)?;
     if !c.finished {
         return Err(format!("{}: the run did not finish", path.display()).into());
     }
@@ -74,9 +73,10 @@ pub fn replay(path: &Path, window: f64) -> Result<Replayed> {
         param_stop: last.param_mse,
         judged: false,
     };
-    let Progress::Adaptive { values, .. } = &c.progress else {
+    let Progress::Adaptive(_) = &c.progress else {
         return Ok(out); // The paper's loop: not judged within its schedule.
     };
+    let values = &c.values;
     let first = match s.method {
         Method::Adaptive => 0,
         Method::Polished => adaptive::polish_starts_at(budget, s.samples, s.polish),

@@ -1,39 +1,12 @@
-//! The build that wrote a checkpoint, and the text of a checkpoint made fit for one line.
+//! The build that writes a checkpoint (the executable's hash, part of the run's identity),
+//! and the text of a checkpoint made fit for one line.
 
-use std::fmt;
 use std::fs;
 
-use serde::{Deserialize, Serialize};
-
-/// The build that wrote a checkpoint.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Build {
-    /// The crate's version.
-    pub version: String,
-    /// 64-bit FNV-1a of the running executable, in hex; `"unknown"` if it could not be read
-    /// (such a checkpoint is never resumed).
-    pub executable: String,
-}
-
-impl Build {
-    /// The running build.
-    pub fn current() -> Self {
-        Build {
-            version: env!("CARGO_PKG_VERSION").into(),
-            executable: executable_hash().map_or_else(|| "unknown".into(), |h| format!("{h:016x}")),
-        }
-    }
-}
-
-impl fmt::Display for Build {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "pathtracer {} (executable {})",
-            one_line(&self.version),
-            one_line(&self.executable)
-        )
-    }
+/// The running executable's 64-bit FNV-1a, in hex; `"unknown"` if it could not be read (a
+/// checkpoint of such a build is never resumed).
+pub(crate) fn executable() -> String {
+    executable_hash().map_or_else(|| "unknown".into(), |h| format!("{h:016x}"))
 }
 
 /// Text read from a checkpoint (or its parser's message, which quotes the file) made fit for

@@ -1,15 +1,13 @@
-//! When a run writes its checkpoint.
+//! When a run writes its checkpoint: the command line's choice, as the library's cadence.
 
-use std::time::Duration;
+use std::path::Path;
 
-/// About every this many seconds of optimisation a run writes its checkpoint (the default
-/// of `--checkpoint-every`): the library's cadence.
-pub const SECONDS_BETWEEN: f64 = plateau_free::lifecycle::CHECKPOINT_SECONDS;
+use plateau_free::lifecycle::Checkpoint;
 
 /// When a run writes its checkpoint (besides at the end and on Ctrl-C, always).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Every {
-    /// About every [`SECONDS_BETWEEN`] seconds of optimisation.
+    /// About every [`plateau_free::lifecycle::CHECKPOINT_SECONDS`] seconds.
     #[default]
     Auto,
     /// Every this many iterations (at least 1).
@@ -28,22 +26,19 @@ impl Every {
         }
     }
 
-    /// Whether a checkpoint is due `iterations` iterations and `spent` of optimisation time
-    /// after the last one.
+    /// The library's checkpoint at `path`, written at this cadence.
     ///
     /// ```
-    /// use std::time::Duration;
     /// use pathtracer::run::Every;
-    /// assert!(!Every::Auto.is_due(100, Duration::from_secs(29)));
-    /// assert!(Every::Auto.is_due(1, Duration::from_secs(30)));
-    /// assert!(Every::Iterations(7).is_due(7, Duration::ZERO));
-    /// assert!(!Every::from_option(Some(0)).is_due(1000, Duration::from_secs(3600)));
+    /// let c = Every::from_option(Some(7)).checkpoint("run/checkpoint.json".as_ref());
+    /// assert_eq!(c.path(), std::path::Path::new("run/checkpoint.json"));
     /// ```
-    pub fn is_due(self, iterations: usize, spent: Duration) -> bool {
+    pub fn checkpoint(self, path: &Path) -> Checkpoint {
+        let checkpoint = Checkpoint::new(path);
         match self {
-            Every::End => false,
-            Every::Iterations(k) => iterations >= k.max(1),
-            Every::Auto => spent.as_secs_f64() >= SECONDS_BETWEEN,
+            Every::Auto => checkpoint,
+            Every::Iterations(k) => checkpoint.every_iterations(k.max(1)),
+            Every::End => checkpoint.every_iterations(0),
         }
     }
 }

@@ -51,6 +51,13 @@ impl Checkpoint {
             return Err("scale, fov_degrees or budget_seconds is out of range".into());
         }
         let non_negative = self.optimisation_seconds >= 0.0 && self.render_seconds >= 0.0;
+        if self
+            .history
+            .last()
+            .is_some_and(|r| r.renders != self.renders)
+        {
+            return Err("the renders are not the history's".into());
+        }
         if !non_negative {
             return Err("the times must be non-negative".into());
         }
@@ -69,67 +76,41 @@ impl Checkpoint {
         {
             return Err(format!("history row {i} is iteration {}", row.iteration));
         }
-        let dim = match &self.progress {
-            Progress::Loop { state } => {
-                state.validate().map_err(|e| e.to_string())?;
-                if state.iteration != done {
-                    return Err(format!(
-                        "the state is at iteration {}, the history has {done} rows",
-                        state.iteration
-                    ));
-                }
-                state.theta.len()
+        let (dim, iteration) = match &self.progress {
+            Progress::Loop(run) => (run.theta().len(), run.iteration()),
+            Progress::Baseline(run) => (run.theta().len(), run.iteration()),
+            Progress::Adaptive(search) => {
+                self.check_search(search)?;
+                (search.dim(), done)
             }
-            Progress::Adaptive {
-                state,
-                values,
-                best_point,
-                bests,
-                best_value,
-                ..
-            } => {
-                if values.len() > s.samples.saturating_mul(s.iterations) {
-                    return Err(format!(
-                        "{} evaluations for a budget of {}",
-                        values.len(),
-                        s.samples.saturating_mul(s.iterations)
-                    ));
-                }
-                let search: plateau_free::AskTell = serde_json::from_value(state.clone())
-                    .map_err(|e| format!("the search's state: {e}"))?;
-                if search.evaluations() != values.len() || search.dim() != best_point.len() {
-                    return Err(format!(
-                        "the search's state has {} evaluations in {} dimensions, the record {} in {}",
-                        search.evaluations(),
-                        search.dim(),
-                        values.len(),
-                        best_point.len()
-                    ));
-                }
-                if values.is_empty() != (done == 0) {
-                    return Err("evaluations without history, or history without".into());
-                }
-                if best_value.is_some_and(|v| !v.is_finite()) {
-                    return Err("the best value is not finite".into());
-                }
-                if let Some(p) = bests.iter().find(|p| p.len() != best_point.len()) {
-                    return Err(format!(
-                        "a best point of dimension {}, the best has {}",
-                        p.len(),
-                        best_point.len()
-                    ));
-                }
-                best_point.len()
-            }
+            Progress::Image(_) => return Err("the image method keeps no checkpoint".into()),
         };
+        if iteration != done {
+            return Err(format!(
+                "the state is at iteration {iteration}, the history has {done} rows"
+            ));
+        }
+        if self.best_point.len() != dim {
+            return Err(format!(
+                "a best point of dimension {}, theta has {dim}",
+                self.best_point.len()
+            ));
+        }
         if let Some(p) = self.snapshots.iter().find(|p| p.len() != dim) {
             return Err(format!(
                 "a snapshot of dimension {}, theta has {dim}",
                 p.len()
             ));
         }
-        if self.snapshots.len() > 6 {
-            return Err(format!("{} snapshots, at most 6", self.snapshots.len()));
+        let most = match self.progress {
+            Progress::Adaptive(_) => done + 1,
+            _ => 6,
+        };
+        if self.snapshots.len() > most {
+            return Err(format!(
+                "{} snapshots, at most {most}",
+                self.snapshots.len()
+            ));
         }
         if dim == 0 || self.snapshots.iter().flatten().any(|v| !v.is_finite()) {
             return Err("theta is empty or a snapshot is not finite".into());
@@ -173,10 +154,7 @@ impl Checkpoint {
                 return Err(mismatch(key, show(&old), show(value)));
             }
         }
-        let dim = match &self.progress {
-            Progress::Loop { state } => state.theta.len(),
-            Progress::Adaptive { best_point, .. } => best_point.len(),
-        };
+        let dim = self.best_point.len();
         if dim != task.dim() {
             return Err(CheckpointError::Inconsistent {
                 path: path.into(),
@@ -186,6 +164,29 @@ impl Checkpoint {
                     task.dim()
                 ),
             });
+        }
+        Ok(())
+    }
+
+    /// Checks the searches' record against their run: every value told, the best.
+    fn check_search(&self, search: &plateau_free::AskTell) -> Result<(), String> {
+        let s = &self.settings;
+        let (values, budget) = (&self.values, s.samples.saturating_mul(s.iterations));
+        if values.len() > budget || search.evaluations() != values.len() {
+            return Err(format!(
+                "{} values for {} evaluations of a budget of {budget}",
+                values.len(),
+                search.evaluations()
+            ));
+        }
+        if values.is_empty() && !self.history.is_empty() {
+            return Err("history without evaluations".into());
+        }
+        if self.best_value.is_some_and(|v| !v.is_finite()) {
+            return Err("the best value is not finite".into());
+        }
+        if self.renders != values.len() {
+            return Err("the renders are not the values told".into());
         }
         Ok(())
     }

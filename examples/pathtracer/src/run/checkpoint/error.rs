@@ -4,7 +4,7 @@ use std::fmt;
 use std::io;
 use std::path::PathBuf;
 
-use super::{one_line, Build, FORMAT};
+use super::one_line;
 
 /// Why a checkpoint cannot be used. Each says what differs or is wrong, and where.
 #[derive(Debug)]
@@ -16,26 +16,20 @@ pub enum CheckpointError {
         /// What the system said.
         error: io::Error,
     },
-    /// The file is not a checkpoint (truncated, corrupted, not JSON, fields missing).
+    /// The file is not a checkpoint (truncated, corrupted, not JSON, fields missing, of
+    /// another layout or library version).
     Damaged {
         /// The file.
         path: PathBuf,
         /// What the parser said (with the line and column).
         error: String,
     },
-    /// Written in another layout.
-    Format {
-        /// The file.
-        path: PathBuf,
-        /// The file's format.
-        found: u32,
-    },
     /// Written by another build.
     OtherBuild {
         /// The file.
         path: PathBuf,
-        /// The build that wrote it.
-        found: Build,
+        /// The hash of the executable that wrote it.
+        found: String,
     },
     /// Of another task or other settings.
     Mismatch {
@@ -67,16 +61,12 @@ impl fmt::Display for CheckpointError {
                 let error = one_line(error);
                 write!(f, "checkpoint {} is damaged: {error}", path.display())
             }
-            CheckpointError::Format { path, found } => write!(
-                f,
-                "checkpoint {} has format {found}, this build reads format {FORMAT}",
-                path.display()
-            ),
             CheckpointError::OtherBuild { path, found } => write!(
                 f,
-                "checkpoint {} was written by another build, {found}; this is {}",
+                "checkpoint {} was written by another build, pathtracer executable {}; this is {}",
                 path.display(),
-                Build::current()
+                one_line(found),
+                super::build::executable()
             ),
             CheckpointError::Mismatch {
                 path,
