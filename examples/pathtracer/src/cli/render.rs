@@ -22,8 +22,8 @@ pub(super) struct Args {
     out: PathBuf,
 }
 
-/// Renders, prints `render_seconds: X` (the median render alone, scene set-up excluded) and
-/// writes the image.
+/// Renders, prints `render_seconds: X` (the median render alone, scene set-up excluded), the
+/// camera paths and rays of one render (`paths: N`, `rays: M`), and writes the image.
 pub(super) fn run(args: Args) -> Result<()> {
     let (task, theta, _) = args.point.resolve()?;
     let o = &args.render;
@@ -36,6 +36,9 @@ pub(super) fn run(args: Args) -> Result<()> {
             image = Some(render::render(&scene, &settings));
         });
         println!("render_seconds: {seconds:.6}");
+        // The work of one render (counted in a separate, untimed render: the same image).
+        let (_, work) = render::render_counted(&scene, &settings);
+        println!("paths: {}\nrays: {}", work.paths, work.rays);
         if let Some(image) = image {
             image.save(&args.out)?;
         }
