@@ -57,15 +57,23 @@ GOAL = 0.5  # the goal: at most half Mitsuba's time per render
 SETTLE = 0.2
 
 
+# One render's work as our binary reports it (`paths: N`, `rays: M`), per task; a binary that
+# does not report it (an older build) leaves it out.
+WORK: dict[str, dict[str, int]] = {}
+
+
 def ours_seconds(binary: str, task: str, threads: int, inner: int, workdir: Path) -> float:
-    """Median of `inner` back-to-back renders of our renderer, as the binary reports it."""
+    """Median of `inner` back-to-back renders of our renderer, as the binary reports it (and
+    the render's paths and rays into `WORK[task]` when it reports them)."""
     cmd = [binary, "render", task, "--target", "--repeat", str(inner), "--threads", str(threads),
            "--out", str(workdir / f"{task}.exr")]
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
-    for line in out.splitlines():
-        if line.startswith("render_seconds:"):
-            return float(line.split(":", 1)[1])
-    raise RuntimeError(f"{' '.join(cmd)}: no render_seconds in its output:\n{out}")
+    fields = dict(line.split(":", 1) for line in out.splitlines() if ":" in line)
+    if "render_seconds" not in fields:
+        raise RuntimeError(f"{' '.join(cmd)}: no render_seconds in its output:\n{out}")
+    if "paths" in fields and "rays" in fields:
+        WORK[task] = {"paths": int(fields["paths"]), "rays": int(fields["rays"])}
+    return float(fields["render_seconds"])
 
 
 class MitsubaTask:
@@ -154,7 +162,8 @@ def measure(args: argparse.Namespace, workdir: Path) -> list[dict[str, Any]]:
         row.update(task=task, width=m.desc["film"]["width"], height=m.desc["film"]["height"],
                    spp=m.spp, depth=int(m.desc["max_depth"]), first=first,
                    first_compile=first_compile, compiled=m.compiled,
-                   timed_renders=args.repeat * args.inner, wall=time.perf_counter() - t)
+                   timed_renders=args.repeat * args.inner, wall=time.perf_counter() - t,
+                   work=WORK.get(task))
         rows.append(row)
         print(f"{task}: " + ", ".join(f"{n} {row[n]:.4f} s" for n in times), flush=True)
     return rows
@@ -172,8 +181,10 @@ def page(args: argparse.Namespace, rows: list[dict[str, Any]], load: tuple[float
     if base:
         head += " before / Mitsuba |"
         rule += "---|"
-    head += f" goal <= {GOAL} | Mitsuba first render (s) | its kernel compile (s) |"
+    head += f" goal <= {GOAL} | ours: M paths / s / core | ours: M rays / s / core |"
     rule += "---|---|---|"
+    head += " Mitsuba first render (s) | its kernel compile (s) |"
+    rule += "---|---|"
     lines = [head, rule]
     for r in rows:
         ratio = r["ours"] / r["mitsuba"]
@@ -184,7 +195,9 @@ def page(args: argparse.Namespace, rows: list[dict[str, Any]], load: tuple[float
         cells += [f"{r['mitsuba']:.4f}", f"{ratio:.2f}"]
         if base:
             cells.append(f"{r['baseline'] / r['mitsuba']:.2f}")
-        cells += ["met" if ratio <= GOAL else "not met", f"{r['first']:.2f}", f"{r['first_compile']:.2f}"]
+        cells.append("met" if ratio <= GOAL else "not met")
+        cells += throughput(r, args.threads)
+        cells += [f"{r['first']:.2f}", f"{r['first_compile']:.2f}"]
         lines.append("| " + " | ".join(cells) + " |")
     compiled = sum(r["compiled"] for r in rows)
     timed = sum(r["timed_renders"] for r in rows)
@@ -213,13 +226,28 @@ def page(args: argparse.Namespace, rows: list[dict[str, Any]], load: tuple[float
         f"{compiled} of {timed} timed Mitsuba renders compiled a kernel. A timed Mitsuba render "
         "is `mi.render` + `dr.eval` + `dr.sync_thread`.",
         "",
-        f"Load average (1 min) {load[0]:.2f} at the start, {load[1]:.2f} at the end: the "
-        "machine was shared with other jobs, so absolute seconds are noisy; the ratios come "
-        "from interleaved renders of one run.",
+        f"Load average (1 min) {load[0]:.2f} at the start, {load[1]:.2f} at the end "
+        f"({os.cpu_count()} cores): the machine was shared with other jobs, so absolute seconds "
+        "are noisy; the ratios come from interleaved renders of one run.",
+        "",
+        "Throughput: one render's camera paths (pixels x spp) and rays (closest-hit queries, "
+        "last-segment queries and shadow rays, as `pathtracer render` counts them), divided by "
+        "our median seconds times the threads: millions per second per core, under the load "
+        "above (a core shared with other jobs counts as a whole core, so these are lower "
+        "bounds).",
         "",
         *lines,
         "",
     ])
+
+
+def throughput(row: dict[str, Any], threads: int) -> list[str]:
+    """Our millions of paths and rays per second per core, or dashes without a count."""
+    work = row.get("work")
+    if not work:
+        return ["-", "-"]
+    core_seconds = row["ours"] * threads
+    return [f"{work['paths'] / core_seconds / 1e6:.1f}", f"{work['rays'] / core_seconds / 1e6:.1f}"]
 
 
 def _cpu_model() -> str:
