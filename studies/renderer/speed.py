@@ -57,9 +57,10 @@ GOAL = 0.5  # the goal: at most half Mitsuba's time per render
 SETTLE = 0.2
 
 
-# One render's work as our binary reports it (`paths: N`, `rays: M`), per task; a binary that
-# does not report it (an older build) leaves it out.
-WORK: dict[str, dict[str, int]] = {}
+# Per task, one render's work as our binary reports it (`paths: N`, `rays: M`) and the CPU
+# seconds per render of each of its runs (`render_cpu_seconds`); a binary that does not report
+# them (an older build) leaves them out.
+WORK: dict[str, dict[str, Any]] = {}
 
 
 def ours_seconds(binary: str, task: str, threads: int, inner: int, workdir: Path) -> float:
@@ -71,8 +72,11 @@ def ours_seconds(binary: str, task: str, threads: int, inner: int, workdir: Path
     fields = dict(line.split(":", 1) for line in out.splitlines() if ":" in line)
     if "render_seconds" not in fields:
         raise RuntimeError(f"{' '.join(cmd)}: no render_seconds in its output:\n{out}")
-    if "paths" in fields and "rays" in fields:
-        WORK[task] = {"paths": int(fields["paths"]), "rays": int(fields["rays"])}
+    if binary == os.environ.get("PATHTRACER") and all(
+            k in fields for k in ("paths", "rays", "render_cpu_seconds")):
+        work = WORK.setdefault(task, {"paths": int(fields["paths"]), "rays": int(fields["rays"]),
+                                      "cpu": []})
+        work["cpu"].append(float(fields["render_cpu_seconds"]))
     return float(fields["render_seconds"])
 
 
@@ -181,7 +185,7 @@ def page(args: argparse.Namespace, rows: list[dict[str, Any]], load: tuple[float
     if base:
         head += " before / Mitsuba |"
         rule += "---|"
-    head += f" goal <= {GOAL} | ours: M paths / s / core | ours: M rays / s / core |"
+    head += f" goal <= {GOAL} | ours: M paths / CPU s | ours: M rays / CPU s |"
     rule += "---|---|---|"
     head += " Mitsuba first render (s) | its kernel compile (s) |"
     rule += "---|---|"
@@ -196,7 +200,7 @@ def page(args: argparse.Namespace, rows: list[dict[str, Any]], load: tuple[float
         if base:
             cells.append(f"{r['baseline'] / r['mitsuba']:.2f}")
         cells.append("met" if ratio <= GOAL else "not met")
-        cells += throughput(r, args.threads)
+        cells += throughput(r)
         cells += [f"{r['first']:.2f}", f"{r['first_compile']:.2f}"]
         lines.append("| " + " | ".join(cells) + " |")
     compiled = sum(r["compiled"] for r in rows)
@@ -230,24 +234,25 @@ def page(args: argparse.Namespace, rows: list[dict[str, Any]], load: tuple[float
         f"({os.cpu_count()} cores): the machine was shared with other jobs, so absolute seconds "
         "are noisy; the ratios come from interleaved renders of one run.",
         "",
-        "Throughput: one render's camera paths (pixels x spp) and rays (closest-hit queries, "
-        "last-segment queries and shadow rays, as `pathtracer render` counts them), divided by "
-        "our median seconds times the threads: millions per second per core, under the load "
-        "above (a core shared with other jobs counts as a whole core, so these are lower "
-        "bounds).",
+        "Throughput (ours): one render's camera paths (pixels x spp) and rays (closest-hit "
+        "queries, last-segment queries and shadow rays, as `pathtracer render` counts them) "
+        "per second of CPU time, in millions: per core actually busy with the render. The CPU "
+        "time is the render's threads' time on a core as Linux counts it "
+        "(`render_cpu_seconds`, the median over our runs), so time the cores spent on other "
+        "jobs is left out; sharing a core's caches with them still slows it.",
         "",
         *lines,
         "",
     ])
 
 
-def throughput(row: dict[str, Any], threads: int) -> list[str]:
-    """Our millions of paths and rays per second per core, or dashes without a count."""
+def throughput(row: dict[str, Any]) -> list[str]:
+    """Our millions of paths and rays per CPU second, or dashes without the counts."""
     work = row.get("work")
     if not work:
         return ["-", "-"]
-    core_seconds = row["ours"] * threads
-    return [f"{work['paths'] / core_seconds / 1e6:.1f}", f"{work['rays'] / core_seconds / 1e6:.1f}"]
+    cpu = statistics.median(work["cpu"])
+    return [f"{work['paths'] / cpu / 1e6:.1f}", f"{work['rays'] / cpu / 1e6:.1f}"]
 
 
 def _cpu_model() -> str:
