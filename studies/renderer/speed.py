@@ -38,6 +38,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import shlex
 import statistics
 import subprocess
 import sys
@@ -205,7 +206,7 @@ def page(args: argparse.Namespace, rows: list[dict[str, Any]], load: tuple[float
         lines.append("| " + " | ".join(cells) + " |")
     compiled = sum(r["compiled"] for r in rows)
     timed = sum(r["timed_renders"] for r in rows)
-    cmd = "target/venv/bin/python -m studies render-speed " + " ".join(args.argv)
+    cmd = "target/venv/bin/python -m studies render-speed " + shlex.join(args.argv)
     cpu = _cpu_model()
     return "\n".join([
         "# Render time: our path tracer against Mitsuba 3",
