@@ -38,6 +38,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import shlex
 import statistics
 import subprocess
 import sys
@@ -57,15 +58,27 @@ GOAL = 0.5  # the goal: at most half Mitsuba's time per render
 SETTLE = 0.2
 
 
+# Per task, one render's work as our binary reports it (`paths: N`, `rays: M`) and the CPU
+# seconds per render of each of its runs (`render_cpu_seconds`); a binary that does not report
+# them (an older build) leaves them out.
+WORK: dict[str, dict[str, Any]] = {}
+
+
 def ours_seconds(binary: str, task: str, threads: int, inner: int, workdir: Path) -> float:
-    """Median of `inner` back-to-back renders of our renderer, as the binary reports it."""
+    """Median of `inner` back-to-back renders of our renderer, as the binary reports it (and
+    the render's paths and rays into `WORK[task]` when it reports them)."""
     cmd = [binary, "render", task, "--target", "--repeat", str(inner), "--threads", str(threads),
            "--out", str(workdir / f"{task}.exr")]
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
-    for line in out.splitlines():
-        if line.startswith("render_seconds:"):
-            return float(line.split(":", 1)[1])
-    raise RuntimeError(f"{' '.join(cmd)}: no render_seconds in its output:\n{out}")
+    fields = dict(line.split(":", 1) for line in out.splitlines() if ":" in line)
+    if "render_seconds" not in fields:
+        raise RuntimeError(f"{' '.join(cmd)}: no render_seconds in its output:\n{out}")
+    if binary == os.environ.get("PATHTRACER") and all(
+            k in fields for k in ("paths", "rays", "render_cpu_seconds")):
+        work = WORK.setdefault(task, {"paths": int(fields["paths"]), "rays": int(fields["rays"]),
+                                      "cpu": []})
+        work["cpu"].append(float(fields["render_cpu_seconds"]))
+    return float(fields["render_seconds"])
 
 
 class MitsubaTask:
@@ -154,7 +167,8 @@ def measure(args: argparse.Namespace, workdir: Path) -> list[dict[str, Any]]:
         row.update(task=task, width=m.desc["film"]["width"], height=m.desc["film"]["height"],
                    spp=m.spp, depth=int(m.desc["max_depth"]), first=first,
                    first_compile=first_compile, compiled=m.compiled,
-                   timed_renders=args.repeat * args.inner, wall=time.perf_counter() - t)
+                   timed_renders=args.repeat * args.inner, wall=time.perf_counter() - t,
+                   work=WORK.get(task))
         rows.append(row)
         print(f"{task}: " + ", ".join(f"{n} {row[n]:.4f} s" for n in times), flush=True)
     return rows
@@ -172,8 +186,10 @@ def page(args: argparse.Namespace, rows: list[dict[str, Any]], load: tuple[float
     if base:
         head += " before / Mitsuba |"
         rule += "---|"
-    head += f" goal <= {GOAL} | Mitsuba first render (s) | its kernel compile (s) |"
+    head += f" goal <= {GOAL} | ours: M paths / CPU s | ours: M rays / CPU s |"
     rule += "---|---|---|"
+    head += " Mitsuba first render (s) | its kernel compile (s) |"
+    rule += "---|---|"
     lines = [head, rule]
     for r in rows:
         ratio = r["ours"] / r["mitsuba"]
@@ -184,11 +200,13 @@ def page(args: argparse.Namespace, rows: list[dict[str, Any]], load: tuple[float
         cells += [f"{r['mitsuba']:.4f}", f"{ratio:.2f}"]
         if base:
             cells.append(f"{r['baseline'] / r['mitsuba']:.2f}")
-        cells += ["met" if ratio <= GOAL else "not met", f"{r['first']:.2f}", f"{r['first_compile']:.2f}"]
+        cells.append("met" if ratio <= GOAL else "not met")
+        cells += throughput(r)
+        cells += [f"{r['first']:.2f}", f"{r['first_compile']:.2f}"]
         lines.append("| " + " | ".join(cells) + " |")
     compiled = sum(r["compiled"] for r in rows)
     timed = sum(r["timed_renders"] for r in rows)
-    cmd = "target/venv/bin/python -m studies render-speed " + " ".join(args.argv)
+    cmd = "target/venv/bin/python -m studies render-speed " + shlex.join(args.argv)
     cpu = _cpu_model()
     return "\n".join([
         "# Render time: our path tracer against Mitsuba 3",
@@ -213,13 +231,29 @@ def page(args: argparse.Namespace, rows: list[dict[str, Any]], load: tuple[float
         f"{compiled} of {timed} timed Mitsuba renders compiled a kernel. A timed Mitsuba render "
         "is `mi.render` + `dr.eval` + `dr.sync_thread`.",
         "",
-        f"Load average (1 min) {load[0]:.2f} at the start, {load[1]:.2f} at the end: the "
-        "machine was shared with other jobs, so absolute seconds are noisy; the ratios come "
-        "from interleaved renders of one run.",
+        f"Load average (1 min) {load[0]:.2f} at the start, {load[1]:.2f} at the end "
+        f"({os.cpu_count()} cores): the machine was shared with other jobs, so absolute seconds "
+        "are noisy; the ratios come from interleaved renders of one run.",
+        "",
+        "Throughput (ours): one render's camera paths (pixels x spp) and rays (closest-hit "
+        "queries, last-segment queries and shadow rays, as `pathtracer render` counts them) "
+        "per second of CPU time, in millions: per core actually busy with the render. The CPU "
+        "time is the render's threads' time on a core as Linux counts it "
+        "(`render_cpu_seconds`, the median over our runs), so time the cores spent on other "
+        "jobs is left out; sharing a core's caches with them still slows it.",
         "",
         *lines,
         "",
     ])
+
+
+def throughput(row: dict[str, Any]) -> list[str]:
+    """Our millions of paths and rays per CPU second, or dashes without the counts."""
+    work = row.get("work")
+    if not work:
+        return ["-", "-"]
+    cpu = statistics.median(work["cpu"])
+    return [f"{work['paths'] / cpu / 1e6:.1f}", f"{work['rays'] / cpu / 1e6:.1f}"]
 
 
 def _cpu_model() -> str:

@@ -40,7 +40,8 @@ enum Command {
     /// Render the reference, optimise from the start, write images, plot, CSV and summary.
     Optimize(optimize::Args),
     /// Render one image at the target (default), the start or given parameters, and print
-    /// `render_seconds: X` (the render alone, scene set-up excluded).
+    /// `render_seconds: X` (the render alone, scene set-up excluded), `render_cpu_seconds: C`,
+    /// `paths: N`, `rays: M`.
     Render(render::Args),
     /// Write the task's scene at the target (default), the start or given parameters as
     /// `scene.json` (with its mesh and texture files) for another renderer to read.

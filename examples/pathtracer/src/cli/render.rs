@@ -22,7 +22,9 @@ pub(super) struct Args {
     out: PathBuf,
 }
 
-/// Renders, prints `render_seconds: X` (the median render alone, scene set-up excluded) and
+/// Renders, prints `render_seconds: X` (the median render alone, scene set-up excluded), on
+/// Linux `render_cpu_seconds: C` (the CPU time of all the process's threads per render, mean
+/// over the repeats), the camera paths and rays of one render (`paths: N`, `rays: M`), and
 /// writes the image.
 pub(super) fn run(args: Args) -> Result<()> {
     let (task, theta, _) = args.point.resolve()?;
@@ -32,13 +34,35 @@ pub(super) fn run(args: Args) -> Result<()> {
         let scene = task.scene(&theta, o.view());
         let settings = render::Settings::new(spp, o.seed, task.max_depth());
         let mut image = None;
+        let cpu = cpu_seconds();
         let seconds = super::median_seconds(args.repeat, || {
             image = Some(render::render(&scene, &settings));
         });
         println!("render_seconds: {seconds:.6}");
+        if let (Some(start), Some(end)) = (cpu, cpu_seconds()) {
+            println!(
+                "render_cpu_seconds: {:.6}",
+                (end - start) / args.repeat as f64
+            );
+        }
+        // The work of one render (counted in a separate, untimed render: the same image).
+        let (_, work) = render::render_counted(&scene, &settings);
+        println!("paths: {}\nrays: {}", work.paths, work.rays);
         if let Some(image) = image {
             image.save(&args.out)?;
         }
         Ok(())
     })
+}
+
+/// CPU seconds the process's threads have run so far: on Linux the sum of the first field
+/// (nanoseconds on a CPU) of every `/proc/self/task/*/schedstat`; None where that is missing.
+/// Unlike wall time it leaves out the time other jobs held the cores.
+fn cpu_seconds() -> Option<f64> {
+    let mut ns = 0u64;
+    for entry in std::fs::read_dir("/proc/self/task").ok()? {
+        let text = std::fs::read_to_string(entry.ok()?.path().join("schedstat")).ok()?;
+        ns += text.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(ns as f64 * 1e-9)
 }

@@ -49,6 +49,37 @@ const IN_FLIGHT: u32 = 4;
 /// but each sample's random numbers come from (seed, pixel, sample) alone and each pixel sums
 /// its samples in order, so the bits do not depend on the thread count.
 pub fn render(scene: &Scene, settings: &Settings) -> Image {
+    render_with::<false>(scene, settings).0
+}
+
+/// The work of a render: camera paths traced and rays cast.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Work {
+    /// Camera paths (samples): pixels times samples per pixel.
+    pub paths: u64,
+    /// Rays cast: closest-hit queries, last-segment queries and shadow rays.
+    pub rays: u64,
+}
+
+/// [`render`] that also counts its [`Work`]; the image is the same, bit for bit.
+///
+/// ```
+/// use pathtracer::render::{render, render_counted, Settings};
+/// let scene = pathtracer::tasks::by_name("shadow").unwrap();
+/// let scene = scene.scene(&scene.target(), pathtracer::tasks::View { scale: Some(0.1), ..Default::default() });
+/// let settings = Settings::new(2, 0, 6);
+/// let (image, work) = render_counted(&scene, &settings);
+/// assert_eq!(image.data, render(&scene, &settings).data);
+/// assert_eq!(work.paths, 2 * (scene.camera.width * scene.camera.height) as u64);
+/// assert!(work.rays >= 2 * work.paths);
+/// ```
+pub fn render_counted(scene: &Scene, settings: &Settings) -> (Image, Work) {
+    render_with::<true>(scene, settings)
+}
+
+/// [`render`], counting the rays when `COUNT` (a separate compilation of the render loop, so
+/// that the uncounted one is unchanged).
+fn render_with<const COUNT: bool>(scene: &Scene, settings: &Settings) -> (Image, Work) {
     let camera = &scene.camera;
     let (width, height) = (camera.width, camera.height);
     let mut image = Image::new(width, height);
@@ -57,13 +88,15 @@ pub fn render(scene: &Scene, settings: &Settings) -> Image {
     // are the same.
     let quads = &scene.geometry.quads;
     let lanes = (quads.len() >= 3).then(|| QuadLanes::pack(quads));
-    let tracer = Tracer::new(scene, lanes.as_deref(), settings);
-    image
+    let tracer = Tracer::<COUNT>::new(scene, lanes.as_deref(), settings);
+    let rays = image
         .data
         .par_chunks_mut(3 * width as usize)
         .enumerate()
-        .for_each(|(y, row)| tracer.row(y as u32, row));
-    image
+        .map(|(y, row)| tracer.row(y as u32, row))
+        .sum();
+    let paths = u64::from(width) * u64::from(height) * u64::from(settings.spp.max(1));
+    (image, Work { paths, rays })
 }
 
 /// Veach's power heuristic (beta = 2) weight of the strategy with density `a` against `b`.
@@ -88,7 +121,7 @@ fn offset(p: Vec3A) -> f32 {
 }
 
 /// The scene and settings a path needs at every segment, and what follows from them.
-struct Tracer<'a> {
+struct Tracer<'a, const COUNT: bool> {
     scene: &'a Scene,
     /// The scene's quads packed for 4-wide tests (the same answers as one by one, bit for bit).
     lanes: Option<&'a [QuadLanes]>,
@@ -112,6 +145,8 @@ struct Path {
     prev_p: Vec3A,
     prev_pdf: f32,
     done: bool,
+    /// Rays cast by the path (counted only by `Tracer<true>`).
+    rays: u32,
 }
 
 impl Path {
@@ -129,11 +164,12 @@ impl Path {
             prev_p: o,
             prev_pdf: 0.0,
             done: false,
+            rays: 0,
         }
     }
 }
 
-impl<'a> Tracer<'a> {
+impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
     fn new(scene: &'a Scene, lanes: Option<&'a [QuadLanes]>, settings: &'a Settings) -> Self {
         let lights = &scene.lights;
         let has_env = lights.environment != Vec3A::ZERO;
@@ -147,19 +183,21 @@ impl<'a> Tracer<'a> {
     }
 
     /// Row `y` of the image into `row` (RGB per pixel): each pixel's samples traced
-    /// `IN_FLIGHT` at a time, the rest one by one.
+    /// `IN_FLIGHT` at a time, the rest one by one. Returns the rays cast (0 unless `COUNT`).
     #[inline(always)]
-    fn row(&self, y: u32, row: &mut [f32]) {
+    fn row(&self, y: u32, row: &mut [f32]) -> u64 {
         let spp = self.settings.spp.max(1);
+        let mut rays = 0u64;
         for x in 0..self.scene.camera.width {
             let mut sum = Vec3A::ZERO;
             // A NaN or infinity from a degenerate configuration must never reach the image:
             // drop that sample (a zero-contribution sample, still counted). The samples are
             // added in order.
-            let mut add = |l: Vec3A| {
+            let mut add = |(l, n): (Vec3A, u32)| {
                 if l.is_finite() {
                     sum += l;
                 }
+                rays += u64::from(n);
             };
             let mut s = 0;
             while s + IN_FLIGHT <= spp {
@@ -178,6 +216,7 @@ impl<'a> Tracer<'a> {
             row[i + 1] = v.y;
             row[i + 2] = v.z;
         }
+        rays
     }
 
     /// Camera sample `s` of pixel (`x`, `y`): its stream and its jittered ray.
@@ -189,25 +228,25 @@ impl<'a> Tracer<'a> {
         Path::new(camera.origin(), camera.direction(x, y, jx, jy), rng)
     }
 
-    /// Radiance of one camera sample: its path traced to the end.
+    /// Radiance of one camera sample (its path traced to the end) and the rays it cast.
     #[inline(always)]
-    fn trace(&self, mut path: Path) -> Vec3A {
+    fn trace(&self, mut path: Path) -> (Vec3A, u32) {
         while !path.done {
             self.segment(&mut path);
         }
-        path.radiance
+        (path.radiance, path.rays)
     }
 
     /// Radiance of `N` camera samples, their paths advanced in turn, a segment each (each
     /// exactly as [`Tracer::trace`] would: the paths share nothing, so the bits are the same).
     #[inline(always)]
-    fn trace_many<const N: usize>(&self, mut paths: [Path; N]) -> [Vec3A; N] {
+    fn trace_many<const N: usize>(&self, mut paths: [Path; N]) -> [(Vec3A, u32); N] {
         while paths.iter().any(|p| !p.done) {
             for path in paths.iter_mut().filter(|p| !p.done) {
                 self.segment(path);
             }
         }
-        paths.map(|p| p.radiance)
+        paths.map(|p| (p.radiance, p.rays))
     }
 
     /// One segment of `path`: its closest hit, emission found there, and the scattering
@@ -216,6 +255,9 @@ impl<'a> Tracer<'a> {
     fn segment(&self, path: &mut Path) {
         let (scene, s) = (self.scene, self.settings);
         let geo = &scene.geometry;
+        if COUNT {
+            path.rays += 1;
+        }
         if path.segments >= s.max_depth {
             // Only an emitter or a miss can still add light: no closest hit needed.
             match geo.last_hit(self.lanes, path.o, path.d) {
@@ -304,6 +346,16 @@ impl<'a> Tracer<'a> {
         path.radiance += path.beta * emission * w;
     }
 
+    /// Whether nothing lies on the shadow ray from `p` along `d` before `tmax` (a ray of
+    /// `path`'s, counted when `COUNT`).
+    #[inline(always)]
+    fn visible(&self, path: &mut Path, p: Vec3A, d: Vec3A, tmax: f32) -> bool {
+        if COUNT {
+            path.rays += 1;
+        }
+        !self.scene.geometry.occluded_in(self.lanes, p, d, tmax)
+    }
+
     /// Next-event estimation at a diffuse hit and the cosine-sampled continuation; false
     /// when the sampled direction is unusable (the path ends).
     #[inline(always)]
@@ -338,7 +390,6 @@ impl<'a> Tracer<'a> {
     fn next_event(&self, path: &mut Path, p: Vec3A, n: Vec3A, albedo: Vec3A) {
         let geo = &self.scene.geometry;
         let lights = &self.scene.lights;
-        let lanes = self.lanes;
         let f = path.beta * albedo * FRAC_1_PI;
         for light in &lights.points {
             let to = light.position - p;
@@ -346,7 +397,7 @@ impl<'a> Tracer<'a> {
             let dist = dist2.sqrt();
             let wi = to / dist;
             let cos = n.dot(wi);
-            if cos > 0.0 && !geo.occluded_in(lanes, p, wi, dist * (1.0 - 1e-4)) {
+            if cos > 0.0 && self.visible(path, p, wi, dist * (1.0 - 1e-4)) {
                 path.radiance += f * light.intensity * (cos / dist2);
             }
         }
@@ -355,7 +406,7 @@ impl<'a> Tracer<'a> {
             let (u1, u2) = path.rng.next_2d();
             if let Some(ls) = lights.sample_area(&geo.quads, p, u_pick, u1, u2) {
                 let cos = n.dot(ls.dir);
-                if cos > 0.0 && !geo.occluded_in(lanes, p, ls.dir, ls.dist * (1.0 - 1e-4)) {
+                if cos > 0.0 && self.visible(path, p, ls.dir, ls.dist * (1.0 - 1e-4)) {
                     let w = power_heuristic(ls.pdf, cos * FRAC_1_PI);
                     path.radiance += f * ls.radiance * (cos * w / ls.pdf);
                 }
@@ -364,7 +415,7 @@ impl<'a> Tracer<'a> {
         if self.env_nee {
             let (u1, u2) = path.rng.next_2d();
             let wi = sample_cosine(n, u1, u2);
-            if n.dot(wi) > 0.0 && !geo.occluded_in(lanes, p, wi, f32::INFINITY) {
+            if n.dot(wi) > 0.0 && self.visible(path, p, wi, f32::INFINITY) {
                 // f * L * cos / pdf with pdf = cos / pi, times the MIS weight.
                 let pdf = n.dot(wi) * FRAC_1_PI;
                 path.radiance +=

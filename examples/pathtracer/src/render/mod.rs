@@ -15,6 +15,7 @@ mod packed;
 mod pairs;
 pub mod rng;
 mod tri_lanes;
+mod wide;
 
 #[cfg(test)]
 mod pinned;
@@ -26,7 +27,7 @@ pub use film::Image;
 pub use geometry::{
     AaBox, BoxSet, BvhKind, Geometry, Mesh, MeshInstance, OrientedBox, Quad, Sphere,
 };
-pub use integrator::{render, Settings};
+pub use integrator::{render, render_counted, Settings, Work};
 pub use light::{Lights, PointLight};
 pub use material::{Material, Texture};
 

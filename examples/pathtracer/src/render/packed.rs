@@ -1,25 +1,26 @@
-//! A mesh's fast ray queries: its obvhs [`Bvh2`] in the pair layout ([`PairBvh`], obvhs's
-//! order) and each leaf's triangles packed four to a [`TriLanes`]. Every answer is obvhs's,
-//! bit for bit (tested against it in `geometry`'s tests).
+//! A mesh's fast ray queries: its obvhs [`Bvh2`] collapsed to a 4-wide tree ([`WideBvh`]) and
+//! each leaf's triangles packed four to a [`TriLanes`]. Every answer is obvhs's, bit for bit,
+//! up to exact ties between two triangles' distances (tested against it in `geometry`'s
+//! tests).
 
 use glam::Vec3A;
 use obvhs::{bvh2::Bvh2, ray::Ray};
 
-use super::pairs::PairBvh;
 use super::tri_lanes::{RayLanes, TriLanes};
+use super::wide::WideBvh;
 
 /// The trees and packed triangles of one mesh; a leaf's `first` is its first pack.
 pub struct PackedMesh {
-    pairs: PairBvh,
+    tree: WideBvh,
     packs: Vec<TriLanes>,
 }
 
 impl PackedMesh {
     /// From `bvh` and its triangles in its primitive order, each as (v0, e1, e2, e1 x e2) of
-    /// obvhs's Möller-Trumbore test; None when the pair layout does not take the tree.
+    /// obvhs's Möller-Trumbore test; None when the 4-wide layout does not take the tree.
     pub fn new(bvh: &Bvh2, tris: &[[Vec3A; 4]]) -> Option<Self> {
         let mut packs = Vec::new();
-        let pairs = PairBvh::with_leaves(bvh, |first, count| {
+        let tree = WideBvh::with_leaves(bvh, |first, count| {
             let at = packs.len() as u32;
             let leaf = &tris[first as usize..(first + count) as usize];
             for (k, four) in leaf.chunks(4).enumerate() {
@@ -27,7 +28,7 @@ impl PackedMesh {
             }
             at
         })?;
-        Some(Self { pairs, packs })
+        Some(Self { tree, packs })
     }
 
     /// The packs of a leaf whose first pack is `first` and which holds `count` triangles.
@@ -42,7 +43,7 @@ impl PackedMesh {
     pub fn closest(&self, mut ray: Ray) -> Option<(f32, u32)> {
         let lanes = RayLanes::new(ray.origin, ray.direction);
         let mut found = None;
-        self.pairs.traverse(&mut ray, |ray, first, count| {
+        self.tree.traverse(&mut ray, |ray, first, count| {
             for pack in self.leaf(first, count) {
                 let (t, mut hits) = pack.distances(&lanes, ray.tmin);
                 while hits != 0 {
@@ -65,7 +66,7 @@ impl PackedMesh {
     pub fn any(&self, mut ray: Ray) -> bool {
         let lanes = RayLanes::new(ray.origin, ray.direction);
         let mut hit = false;
-        self.pairs.traverse(&mut ray, |ray, first, count| {
+        self.tree.traverse(&mut ray, |ray, first, count| {
             hit = self.leaf(first, count).iter().any(|pack| {
                 let (t, hits) = pack.distances(&lanes, ray.tmin);
                 (0..4).any(|k| hits & (1 << k) != 0 && t[k] < ray.tmax)

@@ -17,8 +17,8 @@ use super::T_MIN;
 /// Which BVH a mesh uses (all built by obvhs; the fastest is the default, see the bench).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BvhKind {
-    /// Binary BVH, traversed in the pair layout with triangles tested four at a time
-    /// (`render/packed.rs`): obvhs's answers, bit for bit.
+    /// Binary BVH, collapsed to a 4-wide tree with triangles tested four at a time
+    /// (`render/packed.rs`): obvhs's answers, bit for bit up to exact ties.
     Bvh2,
     /// The same binary BVH traversed by obvhs itself (the reference for the bench).
     Bvh2Obvhs,

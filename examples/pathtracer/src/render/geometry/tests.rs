@@ -83,7 +83,7 @@ fn grid_mesh() -> Vec<Triangle> {
 }
 
 #[test]
-fn pair_layout_and_packed_triangles_answer_as_obvhs() {
+fn wide_tree_and_packed_triangles_answer_as_obvhs() {
     let tris = grid_mesh();
     let mesh = Mesh::new(&tris, BvhKind::Bvh2);
     assert!(matches!(mesh.accel, Accel::Packed(..)));
@@ -91,7 +91,7 @@ fn pair_layout_and_packed_triangles_answer_as_obvhs() {
     let params = BvhBuildParams::medium_build();
     let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(&tris, params, &mut unused);
     let mut rng = crate::render::rng::Sampler::new(4, 5, 6);
-    let mut hits = 0;
+    let (mut hits, mut ties) = (0, 0);
     for k in 0..20_000 {
         let (a, b) = rng.next_2d();
         let (c, e) = rng.next_2d();
@@ -124,11 +124,24 @@ fn pair_layout_and_packed_triangles_answer_as_obvhs() {
         let got = mesh
             .intersect(o, d, tmax)
             .map(|(t, id)| (t.to_bits(), mesh.triangles()[id as usize]));
-        assert_eq!(
-            got.map(|(t, tri)| (t, tri.v0, tri.v1, tri.v2)),
-            want.map(|(t, tri)| (t, tri.v0, tri.v1, tri.v2)),
-            "ray {k}"
-        );
+        // Off vertices: the same triangle at the same distance, bit for bit. At a vertex the
+        // triangles around it tie within rounding, and which one is found depends on the
+        // order of visits (the 4-wide tree's differs from the binary tree's, and a box entered
+        // a rounding error beyond the hit so far is skipped): the distance agrees to rounding
+        // (1e-5 relative), and the triangle found is hit at the distance reported.
+        if k % 4 != 0 {
+            let same = |h: Option<(u32, Triangle)>| h.map(|(t, tri)| (t, tri.v0, tri.v1, tri.v2));
+            assert_eq!(same(got), same(want), "ray {k}");
+        } else {
+            assert_eq!(got.is_some(), want.is_some(), "ray {k}");
+            if let (Some((t, tri)), Some((w, other))) = (got, want) {
+                let (t32, w32) = (f32::from_bits(t), f32::from_bits(w));
+                assert!((t32 - w32).abs() <= 1e-5 * w32, "ray {k}: {t32} vs {w32}");
+                let ray = BvhRay::new(o, d, T_MIN, tmax);
+                assert_eq!(tri.intersect(&ray).to_bits(), t, "ray {k}");
+                ties += usize::from((tri.v0, tri.v1, tri.v2) != (other.v0, other.v1, other.v2));
+            }
+        }
         let blocked = !bvh.ray_traverse_miss(ray, |r, id| {
             tris[bvh.primitive_indices[id] as usize].intersect(r)
         });
@@ -136,6 +149,8 @@ fn pair_layout_and_packed_triangles_answer_as_obvhs() {
         hits += usize::from(want.is_some());
     }
     assert!(hits > 5_000, "{hits}");
+    // Another triangle than obvhs's at a few of the 5,000 vertex rays only.
+    assert!(ties < 500, "{ties}");
 }
 
 #[test]
