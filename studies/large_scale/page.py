@@ -433,6 +433,7 @@ def main() -> None:
         "TPA only where CSA agrees": read(glob.glob(os.path.join(out, "tried-tpaguard-texture*.csv"))),
         "the warm-up without the two points after it": read(glob.glob(os.path.join(out, "tried-nopair-texture*.csv"))),
         "the warm-up twice as fast": read(glob.glob(os.path.join(out, "tried-fast-texture*.csv"))),
+        "the low-rank-plus-diagonal metric": read(glob.glob(os.path.join(out, "tried-lowrank-texture*.csv"))),
     }
     tried = {k: v for k, v in tried.items() if v}
     tried_bbob = {
@@ -441,6 +442,7 @@ def main() -> None:
         "median success rule": read(sorted(glob.glob(os.path.join(out, "tried-msr-bbob*.csv")))),
         "TPA": read(sorted(glob.glob(os.path.join(out, "tried-tpa-bbob*.csv")))),
         "the warm-up without the two points after it": read(sorted(glob.glob(os.path.join(out, "tried-nopair-bbob*.csv")))),
+        "the low-rank-plus-diagonal metric": read(sorted(glob.glob(os.path.join(out, "tried-lowrank-bbob*.csv")))),
     }
     tried_bbob = {k: v for k, v in tried_bbob.items() if v}
     seeds_path = os.path.join(out, "tried-seeds-bbob.csv")
