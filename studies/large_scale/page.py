@@ -42,7 +42,7 @@ PEERS = {
 ALL = {**ARMS, **PEERS}
 # The arms of the yardsticks' table, and its sizes.
 YARDSTICK_ARMS = ["minimize", "minimize-box", "minimize-sigma", "sepcma", *PEERS]
-YARDSTICK_SIZES = [768, 3072, 12288]
+YARDSTICK_SIZES = [768, 3072, 12288, 49152]
 Row = dict[str, str]
 
 
@@ -103,10 +103,10 @@ def cell_text(runs: list[Row]) -> tuple[str, float]:
 def in_grid(arm: str, n: int, budget: int) -> bool:
     """Whether ``scripts/large-scale`` runs this cell: 10^4 and 10^5 everywhere (the image
     method's 10^5 up to n = 3,072), 10^6 at n = 768 (not for the image method); ``minimize``
-    with sigma0 0.25 at n <= 3,072; pypop7's strategies at 10^4 up to n = 12,288 and at 10^5
-    up to n = 3,072."""
+    with sigma0 0.25 at n <= 3,072; pypop7's strategies at 10^4 at every size and at 10^5 up
+    to n = 12,288."""
     if arm in PEERS:
-        return budget == 10_000 and n <= 12288 or budget == 100_000 and n <= 3072
+        return budget == 10_000 and n <= 49152 or budget == 100_000 and n <= 12288
     if arm == "minimize-sigma" and n > 3072:
         return False
     if budget == 1_000_000:
