@@ -49,6 +49,11 @@ pub enum Metric {
     /// CMA-ES, Ros and Hansen 2008, positive weights only). For large `n`; slow on rotated,
     /// ill-conditioned functions.
     Diagonal,
+    /// The diagonal covariance times a limited memory of directions (LM-MA-ES's matrix
+    /// adaptation, Loshchilov, Glasmachers and Beyer 2019): `4 + 3 ln n` evolution paths of
+    /// the selected steps stretch the draws along the search's recent progress, learning
+    /// rotated structure a diagonal cannot, in `O(n ln n)` memory and time per evaluation.
+    LowRank,
 }
 
 /// What a run does with an evaluation that failed: a NaN or infinite value (or, in the

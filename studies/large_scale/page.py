@@ -25,10 +25,24 @@ BUDGETS = [10_000, 100_000, 1_000_000]
 SEEDS = [0, 1, 2]
 ARMS = {
     "minimize": "`minimize` (default)",
+    "minimize-box": "`minimize` (the box [0, 1])",
+    "minimize-sigma": "`minimize` (sigma0 0.25)",
     "paper": "paper loop (sigma0 0.025, lr 0.003, N 40)",
     "sepcma": "sep-CMA-ES (pycma)",
     "image": "image method (`least_squares`)",
 }
+# pypop7's large-scale strategies (``pypop.py``), the yardsticks' table.
+PEERS = {
+    "lmcma": "LM-CMA",
+    "lmmaes": "LM-MA-ES",
+    "mmes": "MMES",
+    "vkdcma": "VkD-CMA",
+    "pysepcma": "sep-CMA-ES (pypop7)",
+}
+ALL = {**ARMS, **PEERS}
+# The arms of the yardsticks' table, and its sizes.
+YARDSTICK_ARMS = ["minimize", "minimize-box", "minimize-sigma", "sepcma", *PEERS]
+YARDSTICK_SIZES = [768, 3072, 12288, 49152]
 Row = dict[str, str]
 
 
@@ -88,7 +102,13 @@ def cell_text(runs: list[Row]) -> tuple[str, float]:
 
 def in_grid(arm: str, n: int, budget: int) -> bool:
     """Whether ``scripts/large-scale`` runs this cell: 10^4 and 10^5 everywhere (the image
-    method's 10^5 up to n = 3,072), 10^6 at n = 768 (not for the image method)."""
+    method's 10^5 up to n = 3,072), 10^6 at n = 768 (not for the image method); ``minimize``
+    with sigma0 0.25 at n <= 3,072; pypop7's strategies at 10^4 at every size and at 10^5 up
+    to n = 12,288."""
+    if arm in PEERS:
+        return budget == 10_000 and n <= 49152 or budget == 100_000 and n <= 12288
+    if arm == "minimize-sigma" and n > 3072:
+        return False
     if budget == 1_000_000:
         return n == 768 and arm != "image"
     return not (arm == "image" and budget == 100_000 and n > 3072)
@@ -99,26 +119,29 @@ def bold(text: str) -> str:
     return f"**{number}**" + marks
 
 
-def texture_table(rows: list[Row]) -> tuple[list[str], list[str]]:
+def texture_table(rows: list[Row], arms: list[str], sizes: list[int]) -> tuple[list[str], list[str]]:
+    """The table of ``arms`` at ``sizes`` (bold: the lowest of the scalar arms, every arm but
+    the image method), and the cells of the grid that did not run."""
     cells = texture_cells(rows)
     lines = [
-        "| n | evaluations | start (median) | " + " | ".join(ARMS.values()) + " |",
-        "|---|---|---|" + "---|" * len(ARMS),
+        "| n | evaluations | start (median) | " + " | ".join(ALL[a] for a in arms) + " |",
+        "|---|---|---|" + "---|" * len(arms),
     ]
     missing: list[str] = []
-    for n in SIZES:
+    for n in sizes:
         for b in BUDGETS:
             texts, values = [], []
-            for arm in ARMS:
+            for arm in arms:
                 text, value = cell_text(cells.get((arm, n, b), []))
                 if not text and in_grid(arm, n, b):
-                    missing.append(f"{ARMS[arm]}, n = {n:,}, {b:.0e} evaluations")
+                    missing.append(f"{ALL[arm]}, n = {n:,}, {b:.0e} evaluations")
                 texts.append(text)
                 values.append(value)
             if all(not t for t in texts):
                 continue
-            starts = [float(r["start_loss"]) for arm in ARMS for r in cells.get((arm, n, b), [])]
-            best = min((v for v in values[:3] if not math.isnan(v)), default=math.nan)
+            starts = [float(r["start_loss"]) for arm in arms for r in cells.get((arm, n, b), [])]
+            scalar = [v for a, v in zip(arms, values) if a != "image"]
+            best = min((v for v in scalar if not math.isnan(v)), default=math.nan)
             shown = [bold(t) if t and v == best else (t or "not run") for t, v in zip(texts, values)]
             shown = [t.replace("\u0000", "") for t in shown]
             start = fmt(median(sorted(set(starts)))) if starts else "n/a"
@@ -128,10 +151,12 @@ def texture_table(rows: list[Row]) -> tuple[list[str], list[str]]:
 
 def never_worse(rows: list[Row]) -> list[str]:
     lines = []
-    for arm in ARMS:
+    for arm in ALL:
         runs = [r for r in rows if r["arm"] == arm and r["capped"] == "0"]
         worse = [r for r in runs if float(r["loss"]) > float(r["start_loss"])]
-        text = f"- {ARMS[arm]}: {len(runs) - len(worse)} of {len(runs)} finished runs at or below the start"
+        if not runs:
+            continue
+        text = f"- {ALL[arm]}: {len(runs) - len(worse)} of {len(runs)} finished runs at or below the start"
         if worse:
             text += ": worse in " + ", ".join(
                 f"n = {int(r['n']):,} seed {r['seed']} at {int(r['budget']):.0e} ({fmt(float(r['loss']))} > {fmt(float(r['start_loss']))})"
@@ -142,10 +167,10 @@ def never_worse(rows: list[Row]) -> list[str]:
 
 
 def seconds_per_evaluation(rows: list[Row]) -> list[str]:
-    lines = ["| n | " + " | ".join(ARMS.values()) + " |", "|---|" + "---|" * len(ARMS)]
+    lines = ["| n | " + " | ".join(ALL.values()) + " |", "|---|" + "---|" * len(ALL)]
     for n in SIZES:
         cells = []
-        for arm in ARMS:
+        for arm in ALL:
             runs = [r for r in rows if r["arm"] == arm and int(r["n"]) == n and int(r["evaluations"]) > 0]
             # One row per run: a run that gave several budgets is listed once per budget.
             seen = {(r["seed"], r["evaluations"], r["seconds"]) for r in runs}
@@ -164,7 +189,7 @@ def plot(rows: list[Row], path: str) -> None:
     cells = texture_cells(rows)
     fig, axes = plt.subplots(1, len(SIZES), figsize=(4 * len(SIZES), 3.6))
     for ax, n in zip(axes, SIZES):
-        for arm, label in ARMS.items():
+        for arm, label in ALL.items():
             xs, ys = [], []
             for b in BUDGETS:
                 _, value = cell_text(cells.get((arm, n, b), []))
@@ -316,46 +341,56 @@ def overhead(rows: list[Row]) -> list[str]:
     ]
 
 
+BBOB_METHODS = {
+    "minimize": "`minimize` (default)",
+    "minimize-box": "`minimize` (the box [-5, 5])",
+    "sepcma": "sep-CMA-ES (pycma)",
+    **PEERS,
+}
+# The functions every method runs at each n (``scripts/large-scale``), and pypop7's subset.
+BBOB_SEVEN = [2, 1, 10, 8, 12, 7, 15]
+BBOB_GRID = {n: list(range(1, 25)) for n in (20, 40, 80, 160)} | {320: BBOB_SEVEN}
+PEERS_BBOB_GRID = {n: BBOB_SEVEN for n in (80, 160, 320)}
+
+
+def bbob_score(runs: dict[tuple[int, int], dict[str, Row]], keys: list[tuple[int, int]], m: str) -> str:
+    if not keys or not all(m in runs[k] for k in keys):
+        return "-"
+    return f"{sum(int(runs[k][m]['targets_reached']) for k in keys) / (11 * len(keys)):.3f}"
+
+
 def bbob_tables(rows: list[Row]) -> list[str]:
+    """The fraction of the targets each method reached per n (over the functions that
+    ``minimize`` and pycma's sep-CMA-ES ran; then over pypop7's subset where it ran), and
+    the runs one by one."""
     if not rows:
         return ["bbob-largescale did not run."]
     dims = sorted({int(r["n"]) for r in rows})
-    methods = ["minimize", "sepcma"]
-    lines = ["| n | functions run | `minimize` | sep-CMA-ES |", "|---|---|---|---|"]
-    pairs: dict[tuple[int, int], dict[str, Row]] = defaultdict(dict)
+    methods = [m for m in BBOB_METHODS if any(r["method"] == m for r in rows)]
+    runs: dict[tuple[int, int], dict[str, Row]] = defaultdict(dict)
     for r in rows:
-        pairs[(int(r["n"]), int(r["function"]))][r["method"]] = r
-    total = {m: [0, 0] for m in methods}
+        runs[(int(r["n"]), int(r["function"]))][r["method"]] = r
+    lines = [
+        "| n | functions | " + " | ".join(BBOB_METHODS[m] for m in methods) + " |",
+        "|---|---|" + "---|" * len(methods),
+    ]
     for n in dims:
-        both = [k for k in pairs if k[0] == n and all(m in pairs[k] for m in methods)]
-        if not both:
-            continue
-        cells = []
-        for m in methods:
-            reached = sum(int(pairs[k][m]["targets_reached"]) for k in both)
-            total[m][0] += reached
-            total[m][1] += 11 * len(both)
-            cells.append(f"{reached / (11 * len(both)):.3f}")
-        lines.append(f"| {n} | {len(both)} | " + " | ".join(cells) + " |")
-    lines.append(
-        "| all | | " + " | ".join(f"{t[0] / t[1]:.3f}" if t[1] else "n/a" for t in total.values()) + " |"
-    )
-    lines.append("")
-    lines.append("Per function (best value minus f_opt at the end; targets reached of 11):")
-    lines.append("")
-    lines.append("| f | " + " | ".join(f"n = {n}: `minimize` / sep-CMA-ES" for n in dims) + " |")
-    lines.append("|---|" + "---|" * len(dims))
-    for f in sorted({k[1] for k in pairs}):
-        cells = []
-        for n in dims:
-            p = pairs.get((n, f), {})
-            cells.append(
-                " / ".join(
-                    f"{fmt(max(float(p[m]['best_minus_opt']), 0.0))} ({p[m]['targets_reached']})" if m in p else "-"
-                    for m in methods
-                )
-            )
-        lines.append(f"| f{f} | " + " | ".join(cells) + " |")
+        main = sorted(k for k in runs if k[0] == n and {"minimize", "sepcma"} <= set(runs[k]))
+        lines.append(f"| {n} | {len(main)} | " + " | ".join(bbob_score(runs, main, m) for m in methods) + " |")
+        peers = sorted(k for k in main if all(p in runs[k] for p in PEERS))
+        if peers and len(peers) < len(main):
+            fs = ", ".join(f"f{k[1]}" for k in peers)
+            lines.append(f"| {n} | {fs} | " + " | ".join(bbob_score(runs, peers, m) for m in methods) + " |")
+    lines += ["", "Per function (best value minus f_opt at the end; targets reached of 11):", ""]
+    lines.append("| n | f | " + " | ".join(BBOB_METHODS[m] for m in methods) + " |")
+    lines.append("|---|---|" + "---|" * len(methods))
+    for k in sorted(runs):
+        cells = [
+            f"{fmt(max(float(runs[k][m]['best_minus_opt']), 0.0))} ({runs[k][m]['targets_reached']})"
+            if m in runs[k] else "-"
+            for m in methods
+        ]  # fmt: skip
+        lines.append(f"| {k[0]} | f{k[1]} | " + " | ".join(cells) + " |")
     capped = [r for r in rows if r["capped"] == "1"]
     if capped:
         lines.append("")
@@ -365,16 +400,14 @@ def bbob_tables(rows: list[Row]) -> list[str]:
 
 def bbob_missing(rows: list[Row]) -> list[str]:
     """The bbob-largescale runs of ``scripts/large-scale``'s grid that are not in ``rows``."""
-    grid = {n: list(range(1, 25)) for n in (20, 40, 80, 160)}
-    grid[320] = [2, 1, 10, 8, 12, 7, 15]
     have = {(r["method"], int(r["n"]), int(r["function"])) for r in rows}
     out = []
-    for n, functions in grid.items():
-        for method in ("minimize", "sepcma"):
+    for method in BBOB_METHODS:
+        grid = PEERS_BBOB_GRID if method in PEERS else BBOB_GRID
+        for n, functions in grid.items():
             lost = [f for f in functions if (method, n, f) not in have]
             if lost:
-                name = "`minimize`" if method == "minimize" else "sep-CMA-ES"
-                out.append(f"bbob-largescale, {name}, n = {n}: f" + ", f".join(map(str, lost)))
+                out.append(f"bbob-largescale, {BBOB_METHODS[method]}, n = {n}: f" + ", f".join(map(str, lost)))
     return out
 
 
@@ -387,7 +420,9 @@ def main() -> None:
     bbob = read([bbob_path]) if os.path.exists(bbob_path) else []
     png = os.path.splitext(page)[0] + ".png"
     plot(rows, png)
-    table, missing = texture_table(rows)
+    table, missing = texture_table(rows, list(ARMS), SIZES)
+    yardsticks, missing_peers = texture_table(rows, YARDSTICK_ARMS, YARDSTICK_SIZES)
+    missing += [m for m in missing_peers if m not in missing]
     template = open(os.path.join(os.path.dirname(__file__), "page.md")).read()
     tried = {
         "TPA warm-up, then CSA, no step back": read(glob.glob(os.path.join(out, "tried-warm-texture*.csv"))),
@@ -398,6 +433,7 @@ def main() -> None:
         "TPA only where CSA agrees": read(glob.glob(os.path.join(out, "tried-tpaguard-texture*.csv"))),
         "the warm-up without the two points after it": read(glob.glob(os.path.join(out, "tried-nopair-texture*.csv"))),
         "the warm-up twice as fast": read(glob.glob(os.path.join(out, "tried-fast-texture*.csv"))),
+        "the low-rank-plus-diagonal metric": read(glob.glob(os.path.join(out, "tried-lowrank-texture*.csv"))),
     }
     tried = {k: v for k, v in tried.items() if v}
     tried_bbob = {
@@ -406,6 +442,7 @@ def main() -> None:
         "median success rule": read(sorted(glob.glob(os.path.join(out, "tried-msr-bbob*.csv")))),
         "TPA": read(sorted(glob.glob(os.path.join(out, "tried-tpa-bbob*.csv")))),
         "the warm-up without the two points after it": read(sorted(glob.glob(os.path.join(out, "tried-nopair-bbob*.csv")))),
+        "the low-rank-plus-diagonal metric": read(sorted(glob.glob(os.path.join(out, "tried-lowrank-bbob*.csv")))),
     }
     tried_bbob = {k: v for k, v in tried_bbob.items() if v}
     seeds_path = os.path.join(out, "tried-seeds-bbob.csv")
@@ -419,6 +456,7 @@ def main() -> None:
         bbob_seeds="\n".join(seeds_table(seeds)) if seeds else "(not run)",
         overhead="\n".join(overhead(read([overhead_path]) if os.path.exists(overhead_path) else [])),
         table="\n".join(table),
+        yardsticks="\n".join(yardsticks),
         plot=os.path.basename(png),
         never_worse="\n".join(never_worse(rows)),
         seconds="\n".join(seconds_per_evaluation(rows)),

@@ -17,7 +17,10 @@ interface, which is what makes ``10^5`` evaluations at ``n = 49,152`` fit.
 The arms (one row per arm, n, seed and budget, appended to ``--out`` as runs end; a row
 already there is not run again):
 
-- ``minimize``: ``plateau_free.ask_tell(x0, budget=B, seed=seed)``, no other option. One run
+- ``minimize``: ``plateau_free.ask_tell(x0, budget=B, seed=seed)``, no other option;
+  ``minimize-box`` with the texels' box ``bounds=[(0, 1)]`` and nothing else (its start spread
+  a quarter of the box's width, every point projected onto the box); ``minimize-sigma`` with
+  ``sigma0=0.25``, the peers' spread, and no box. One run
   at the largest budget gives every smaller one: the search does not depend on its budget, and
   its result at ``B`` is the best of the first ``B`` evaluations, which is what is recorded.
 - ``paper``: the paper's loop, ``method='plateau'`` with ``sigma0=0.025, lr=0.003,
@@ -33,13 +36,15 @@ already there is not run again):
   parameter through ``mean(x)``, by ``1/n`` each: the pattern drops that coupling, which the
   method's acceptance test, on the true sum of squares, keeps honest), all else default; its
   schedule depends on the budget (one run per budget); the value is the best point's.
+- ``lmcma``, ``lmmaes``, ``mmes``, ``vkdcma``, ``pysepcma``: pypop7's large-scale evolution
+  strategies (``pypop.py``), sigma 0.25, on the texture task and on bbob-largescale.
 
 Every run has a wall-time cap (``--cap`` seconds); a run that reaches it is recorded with the
 evaluations it made and its best value so far, marked ``capped``.
 
 **bbob-largescale** (``bbob`` subcommand): COCO's ``bbob-largescale`` suite from the
 coco-experiment package (``cocoex``), ``minimize`` (``ask_tell(x0, budget=1000 n, seed=0)``,
-no other option) against sep-CMA-ES (pycma, ``CMA_diagonal=True``, sigma0 2, seed 1, with
+no other option; ``minimize-box`` with the suite's box ``[-5, 5]^n`` and nothing else) against sep-CMA-ES (pycma, ``CMA_diagonal=True``, sigma0 2, seed 1, with
 IPOP-free default stopping: a run that stops early leaves budget unused), at ``1000 n``
 evaluations (both stop at ``f_opt + 1e-8``), recording the fraction of the 11 targets ``f_opt + 10^k``, ``k = 2, 1, ..., -8``,
 reached, as ``docs/results/compare.md`` counts them.
@@ -69,6 +74,8 @@ BBOB_COLUMNS = [
     "seconds", "capped",
 ]  # fmt: skip
 TARGETS = [10.0**k for k in range(2, -9, -1)]
+# pypop7's large-scale strategies (``pypop.py``), by arm name.
+PYPOP = ("lmcma", "lmmaes", "mmes", "vkdcma", "pysepcma")
 
 
 def reference(r: int) -> Vector:
@@ -157,12 +164,23 @@ class Outcome:
     capped: bool
 
 
-def run_minimize(task: Texture, x0: Vector, budgets: list[int], seed: int, cap: float) -> Outcome:
+# The options of each ``minimize`` arm on the texture task: none; the texels' box (which also
+# sets the start spread, a quarter of its width); the peers' one spread, without the box.
+MINIMIZE_ARMS: dict[str, dict[str, object]] = {
+    "minimize": {},
+    "minimize-box": {"bounds": [(0.0, 1.0)]},
+    "minimize-sigma": {"sigma0": 0.25},
+}
+
+
+def run_minimize(
+    task: Texture, x0: Vector, budgets: list[int], seed: int, cap: float, arm: str = "minimize"
+) -> Outcome:
     import plateau_free
 
     rec = Recorder(budgets)
     t0 = time.perf_counter()
-    es = plateau_free.ask_tell(x0, budget=max(budgets), seed=seed)
+    es = plateau_free.ask_tell(x0, budget=max(budgets), seed=seed, **MINIMIZE_ARMS[arm])
     capped = False
     while not es.done:
         if time.perf_counter() - t0 > cap:
@@ -306,8 +324,8 @@ def runs(
     arm: str, task: Texture, x0: Vector, budgets: list[int], seed: int, cap: float
 ) -> Iterator[tuple[Outcome, list[int]]]:
     """The runs of one arm for the budgets not yet measured, smallest first."""
-    if arm == "minimize":
-        yield run_minimize(task, x0, budgets, seed, cap), budgets
+    if arm in MINIMIZE_ARMS:
+        yield run_minimize(task, x0, budgets, seed, cap, arm), budgets
     elif arm == "sepcma":
         yield run_sepcma(task, x0, budgets, seed, cap), budgets
     elif arm == "paper":
@@ -316,16 +334,23 @@ def runs(
     elif arm == "image":
         for b in budgets:
             yield run_image(task, x0, b, seed, cap), [b]
+    elif arm in PYPOP:
+        from studies.large_scale import pypop
+
+        yield pypop.texture(arm, task, x0, budgets, seed, cap), budgets
     else:
-        raise ValueError(f"arm = {arm!r}: expected minimize, paper, sepcma or image")
+        raise ValueError(f"arm = {arm!r}: expected minimize, paper, sepcma, image or one of {PYPOP}")
 
 
-def bbob_minimize(problem: object, budget: int, target: float, cap: float) -> tuple[int, bool]:
+def bbob_minimize(
+    problem: object, budget: int, target: float, cap: float, box: bool = False
+) -> tuple[int, bool]:
     import plateau_free
 
     p: object = problem
     x0 = np.asarray(p.initial_solution, dtype=np.float64)  # type: ignore[attr-defined]
-    es = plateau_free.ask_tell(x0, budget=budget, seed=0, target=target)
+    more = {"bounds": [(-5.0, 5.0)]} if box else {}
+    es = plateau_free.ask_tell(x0, budget=budget, seed=0, target=target, **more)
     t0, evaluations = time.perf_counter(), 0
     while not es.done:
         if time.perf_counter() - t0 > cap:
@@ -403,9 +428,15 @@ def bbob_run(suite: object, method: str, fid: int, n: int, inst: int, a: argpars
     fopt = bbob_fopt(suite, fid, n, inst)
     p = suite.get_problem_by_function_dimension_instance(fid, n, inst)  # type: ignore[attr-defined]
     t0 = time.perf_counter()
-    run = bbob_minimize if method == "minimize" else bbob_sepcma
-    # Both stop at the last target, f_opt + 1e-8 (as docs/results/compare.md's runs do).
-    evaluations, capped = run(p, 1000 * n, fopt + 1e-8, a.cap)
+    # Every method stops at the last target, f_opt + 1e-8 (as docs/results/compare.md's runs do).
+    if method in PYPOP:
+        from studies.large_scale import pypop
+
+        evaluations, capped = pypop.bbob(method, p, 1000 * n, fopt + 1e-8, a.cap)
+    elif method in ("minimize", "minimize-box"):
+        evaluations, capped = bbob_minimize(p, 1000 * n, fopt + 1e-8, a.cap, method == "minimize-box")
+    else:
+        evaluations, capped = bbob_sepcma(p, 1000 * n, fopt + 1e-8, a.cap)
     seconds = time.perf_counter() - t0
     best_value = float(p.best_observed_fvalue1)
     p.free()

@@ -25,6 +25,9 @@ pub(crate) struct Adaptive {
     sigma0: f64,
     scales: Vec<f64>,
     full: bool,
+    /// The low-rank-plus-diagonal metric ([`Metric::LowRank`]).
+    #[cfg_attr(feature = "serde", serde(default))]
+    low_rank: bool,
     lambda: usize,
     start: Vec<f64>,
     iterations: usize,
@@ -56,7 +59,7 @@ impl Adaptive {
         let (sigma0, scales) = start_spread(o, x0);
         let full = match o.metric {
             Metric::Full => true,
-            Metric::Diagonal => false,
+            Metric::Diagonal | Metric::LowRank => false,
             Metric::Auto => n <= FULL_METRIC_MAX_DIM,
         };
         Adaptive {
@@ -64,6 +67,7 @@ impl Adaptive {
             sigma0,
             scales,
             full,
+            low_rank: o.metric == Metric::LowRank,
             lambda: o.population.unwrap_or_else(|| Params::default_lambda(n)),
             start: x0.to_vec(),
             iterations: 0,
@@ -155,6 +159,9 @@ impl Adaptive {
                 self.lambda,
                 self.full,
             );
+            if self.low_rank {
+                dist = dist.with_low_rank();
+            }
             dist.mirrored = o.mirrored;
             dist.flat_growth = o.flat_growth;
             dist

@@ -36,14 +36,18 @@
 //!
 //! Implemented here from the published formulas; no code is taken from any other project.
 
+use std::borrow::Cow;
+
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 mod ends;
+mod lowrank;
 
 pub(crate) use ends::RunEnd;
+use lowrank::LowRank;
 
 /// The strategy parameters for a dimension and population size (Hansen 2016, Table 1).
 #[derive(Debug, Clone)]
@@ -165,6 +169,10 @@ pub(crate) struct SearchGaussian {
     /// Whether a generation of this run was flat (its values tie).
     #[cfg_attr(feature = "serde", serde(default))]
     pub ties: bool,
+    /// The directions of the low-rank-plus-diagonal metric (`lowrank.rs`), on top of the
+    /// diagonal one; `None` for a full or a purely diagonal metric.
+    #[cfg_attr(feature = "serde", serde(default))]
+    low_rank: Option<LowRank>,
 }
 
 /// A warm-up of two-point step-size adaptation (TPA: Hansen, "CMA-ES with Two-Point Step-Size
@@ -229,6 +237,9 @@ impl SearchGaussian {
         if let Some(shift) = &self.tpa.shift {
             len("search mean shift", shift.len(), n)?;
         }
+        if let Some(low_rank) = &self.low_rank {
+            low_rank.check(n)?;
+        }
         if let Some((cov, b)) = &self.full {
             len("search covariance", cov.nrows() * cov.ncols(), n * n)?;
             len("search eigenvectors", b.nrows() * b.ncols(), n * n)?;
@@ -291,7 +302,17 @@ impl SearchGaussian {
             first_range: None,
             flat_bottom: 0,
             ties: false,
+            low_rank: None,
         }
+    }
+
+    /// The same run with the low-rank-plus-diagonal metric ([`crate::Metric::LowRank`]): the
+    /// diagonal one and LM-MA-ES's directions (`lowrank.rs`). A full metric stays full.
+    pub fn with_low_rank(mut self) -> SearchGaussian {
+        if self.full.is_none() {
+            self.low_rank = Some(LowRank::new(self.n, self.p.lambda));
+        }
+        self
     }
 
     /// Whether the run draws TPA's two points and starts with its warm-up (the diagonal
@@ -331,6 +352,12 @@ impl SearchGaussian {
                 ys.push(-prev);
                 continue;
             }
+            if let Some(low_rank) = &self.low_rank {
+                let mut u = DVector::from_fn(n, |_, _| -> f64 { StandardNormal.sample(rng) });
+                low_rank.apply(&mut u);
+                ys.push(u.component_mul(&self.d));
+                continue;
+            }
             let z = DVector::from_fn(n, |i, _| {
                 let v: f64 = StandardNormal.sample(rng);
                 v * self.d[i]
@@ -350,7 +377,7 @@ impl SearchGaussian {
             return None;
         }
         let shift = self.tpa.shift.as_ref()?;
-        let len = shift.component_div(&self.d).norm();
+        let len = self.inv_sqrt(shift).norm();
         (len > 0.0 && len.is_finite()).then(|| shift / len)
     }
 
@@ -412,18 +439,39 @@ impl SearchGaussian {
         &self.mean + y * self.sigma
     }
 
-    /// `C^{-1/2} y`.
+    /// `C^{-1/2} y` (with the low-rank metric, `M^{-1} D^{-1} y`: the draw's `z`).
     fn inv_sqrt(&self, y: &DVector<f64>) -> DVector<f64> {
-        match &self.full {
-            Some((_, b)) => {
+        match (&self.full, &self.low_rank) {
+            (Some((_, b)), _) => {
                 let mut t = b.tr_mul(y);
                 for (ti, di) in t.iter_mut().zip(self.d.iter()) {
                     *ti /= *di;
                 }
                 b * t
             }
-            None => y.component_div(&self.d),
+            (None, Some(low_rank)) => {
+                let mut z = y.component_div(&self.d);
+                low_rank.apply_inverse(&mut z);
+                z
+            }
+            (None, None) => y.component_div(&self.d),
         }
+    }
+
+    /// The offsets the diagonal metric learns from: the draws themselves, or with the
+    /// low-rank metric their `D z` (what the directions leave); and the mean shift's.
+    fn diagonal_offsets<'a>(
+        &self,
+        ys: &'a [DVector<f64>],
+        yw: &'a DVector<f64>,
+        zw: &DVector<f64>,
+    ) -> (Cow<'a, [DVector<f64>]>, Cow<'a, DVector<f64>>) {
+        if self.low_rank.is_none() {
+            return (Cow::Borrowed(ys), Cow::Borrowed(yw));
+        }
+        let dz = |z: DVector<f64>| z.component_mul(&self.d);
+        let each = ys.iter().map(|y| dz(self.inv_sqrt(y))).collect();
+        (Cow::Owned(each), Cow::Owned(dz(zw.clone())))
     }
 
     /// The variance of coordinate `i` (before `sigma^2`).
@@ -479,6 +527,7 @@ impl SearchGaussian {
         // Evolution paths.
         let cs = p.cs;
         let inv = self.inv_sqrt(&yw);
+        let (ds, dw) = self.diagonal_offsets(ys, &yw, &inv);
         self.ps
             .axpy((cs * (2.0 - cs) * p.mueff).sqrt(), &inv, 1.0 - cs);
         let ps_norm = self.ps.norm();
@@ -488,7 +537,7 @@ impl SearchGaussian {
         let hs = if hsig { 1.0 } else { 0.0 };
         let cc = p.cc;
         self.pc
-            .axpy(hs * (cc * (2.0 - cc) * p.mueff).sqrt(), &yw, 1.0 - cc);
+            .axpy(hs * (cc * (2.0 - cc) * p.mueff).sqrt(), &dw, 1.0 - cc);
 
         // Covariance: rank-one, rank-mu and the active (negative) update.
         let (c1, cmu) = (self.c1, self.cmu);
@@ -527,11 +576,14 @@ impl SearchGaussian {
                 let mut var = self.d.map(|d| d * d * decay);
                 var.zip_apply(&self.pc, |v, p| *v += c1 * p * p);
                 for &(w, k) in &terms {
-                    var.zip_apply(&ys[k], |v, y| *v += w * y * y);
+                    var.zip_apply(&ds[k], |v, y| *v += w * y * y);
                 }
                 let floor = var.max().abs() * 1e-20 + f64::MIN_POSITIVE;
                 self.d = var.map(|v| v.max(floor).sqrt());
             }
+        }
+        if let Some(low_rank) = &mut self.low_rank {
+            low_rank.update(&inv, self.p.mueff);
         }
 
         // Step size: TPA's warm-up (diagonal metric), then cumulative step-size adaptation;
