@@ -14,7 +14,8 @@
 //! negative weights of Jastrebski and Arnold, CEC 2006): cumulative step-size adaptation
 //! shrinks `sigma` while successive steps cancel (progress made, optimum near) and grows it
 //! while they align; the covariance learns the function's metric from the selected steps,
-//! which is what ill-conditioned and rotated problems need. There is no floor on `sigma`.
+//! which is what ill-conditioned and rotated problems need. There is no floor on `sigma`, but one on the
+//! spread along a discrete coordinate ([`crate::Minimizer::steps`], `floor.rs`).
 //! With the diagonal metric (large n) each run opens with a warm-up of two-point step-size
 //! adaptation that shrinks a start spread far too wide in `O(ln n)` generations per e-fold
 //! ([`Tpa`]), then CSA as above; a run whose warm-up drew nothing better than the best value
@@ -42,8 +43,10 @@ use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 mod ends;
+mod floor;
 
 pub(crate) use ends::RunEnd;
+pub(crate) use floor::floors;
 
 /// The strategy parameters for a dimension and population size (Hansen 2016, Table 1).
 #[derive(Debug, Clone)]
@@ -162,6 +165,10 @@ pub(crate) struct SearchGaussian {
     /// Whether a generation of this run was flat (its values tie).
     #[cfg_attr(feature = "serde", serde(default))]
     pub ties: bool,
+    /// The least standard deviation of each coordinate (`floor.rs`): positive on the discrete
+    /// coordinates of [`crate::Minimizer::steps`], empty when there are none.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub floors: Vec<f64>,
 }
 
 /// A warm-up of two-point step-size adaptation (TPA: Hansen, "CMA-ES with Two-Point Step-Size
@@ -226,6 +233,9 @@ impl SearchGaussian {
         if let Some(shift) = &self.tpa.shift {
             len("search mean shift", shift.len(), n)?;
         }
+        if !self.floors.is_empty() {
+            len("search floors", self.floors.len(), n)?;
+        }
         if let Some((cov, b)) = &self.full {
             len("search covariance", cov.nrows() * cov.ncols(), n * n)?;
             len("search eigenvectors", b.nrows() * b.ncols(), n * n)?;
@@ -288,6 +298,7 @@ impl SearchGaussian {
             first_range: None,
             flat_bottom: 0,
             ties: false,
+            floors: Vec::new(),
         }
     }
 
@@ -539,6 +550,7 @@ impl SearchGaussian {
         if flat && !bottom && self.flat_growth {
             self.sigma *= (0.2 + cs / self.p.ds).exp();
         }
+        self.apply_floors();
         self.generation += 1;
 
         // Eigendecomposition, lazily (every ~1/(10 n (c1 + cmu)) generations).
