@@ -179,3 +179,29 @@ fn bad_steps_are_errors() {
         .unwrap_err();
     assert!(e.to_string().contains("Strategy::Adaptive"), "{e}");
 }
+
+#[cfg(feature = "serde")]
+#[test]
+fn a_saved_run_with_steps_goes_on_bit_for_bit() {
+    let m = Minimizer::without_objective()
+        .steps(vec![1.0, 0.0, 0.5])
+        .bounds(vec![-3.0; 3], vec![3.0; 3])
+        .budget(500)
+        .seed(2);
+    let mut run = m.ask_tell(&[1.0, 1.0, 1.0]).unwrap();
+    for _ in 0..12 {
+        let ask = run.ask().unwrap().unwrap();
+        let values: Vec<f64> = ask.iter().map(|(x, _)| mixed(x)).collect();
+        run.tell(&values).unwrap();
+    }
+    let saved = serde_json::to_string(&run).unwrap();
+    let mut run: plateau_free::AskTell = serde_json::from_str(&saved).unwrap();
+    while let Some(ask) = run.ask().unwrap() {
+        let values: Vec<f64> = ask.iter().map(|(x, _)| mixed(x)).collect();
+        run.tell(&values).unwrap();
+    }
+    assert_eq!(
+        run.finish().unwrap(),
+        recorded(&m, mixed, &[1.0, 1.0, 1.0]).0
+    );
+}

@@ -41,14 +41,23 @@ def table(runs: list[dict[str, Any]], columns: list[tuple[str, Callable[[dict], 
     return _page.table(["", *[name for name, _ in columns]], rows)
 
 
+def spans(xs: list[int]) -> str:
+    """``[1, 2, 3, 5]`` as ``1-3, 5``."""
+    out, start = [], None
+    for i, x in enumerate(xs):
+        start = x if start is None else start
+        if i + 1 == len(xs) or xs[i + 1] != x + 1:
+            out.append(f"{start}-{x}" if x > start else f"{x}")
+            start = None
+    return ", ".join(out)
+
+
 def suite_section(name: str, runs: list[dict[str, Any]]) -> list[str]:
     dims = sorted({r["n"] for r in runs})
-    instances = sorted({r["instance"] for r in runs})
-    functions = sorted({r["f"] for r in runs})
-    lines = [f"## {name}", "",
-             f"{len(runs)} runs: functions {functions[0]}-{functions[-1]} "
-             f"({len(functions)}), n = {', '.join(map(str, dims))}, instances "
-             f"{', '.join(map(str, instances))}, budget 1000 n.", ""]
+    grid = "; ".join(
+        f"n = {n}: functions {spans(sorted({r['f'] for r in runs if r['n'] == n}))}, instances "
+        f"{spans(sorted({r['instance'] for r in runs if r['n'] == n}))}" for n in dims)
+    lines = [f"## {name}", "", f"{len(runs)} runs, budget 1000 n ({grid}).", ""]
     by_n = [(f"n = {n}", lambda r, n=n: r["n"] == n) for n in dims]
     lines += table(runs, [*by_n, ("all", lambda r: True)])
     for group, fids in GROUPS.items():

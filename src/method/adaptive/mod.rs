@@ -158,15 +158,7 @@ impl Adaptive {
             dist.mirrored = o.mirrored;
             dist.flat_growth = o.flat_growth;
             if let Some(steps) = &o.steps {
-                if std::env::var("PF_EXP_FLOOR").map_or(true, |v| v != "0") {
-                    dist.floors = floors(steps, self.lambda);
-                }
-            }
-            let ceil = std::env::var("PF_EXP_CEIL").unwrap_or_default();
-            if let Some((lo, hi)) = &o.bounds {
-                if ceil == "all" || (ceil == "declared" && o.steps.is_some()) {
-                    dist.ceilings = lo.iter().zip(hi).map(|(l, h)| (h - l) / 3.0).collect();
-                }
+                dist.floors = floors(steps, self.lambda);
             }
             dist
         });

@@ -50,7 +50,7 @@ impl SearchGaussian {
     /// the module), scaling the covariance's rows and columns; the full metric is then
     /// decomposed again.
     pub(super) fn apply_floors(&mut self) {
-        if self.floors.is_empty() && self.ceilings.is_empty() {
+        if self.floors.is_empty() {
             return;
         }
         let mut scale = vec![1.0; self.n];
@@ -59,13 +59,6 @@ impl SearchGaussian {
             let sd = self.sigma * self.variance(i).sqrt();
             if floor > 0.0 && sd < floor && sd > 0.0 {
                 scale[i] = floor / sd;
-                raised = true;
-            }
-        }
-        for (i, &ceiling) in self.ceilings.iter().enumerate() {
-            let sd = self.sigma * self.variance(i).sqrt();
-            if sd > ceiling && ceiling > 0.0 {
-                scale[i] = ceiling / sd;
                 raised = true;
             }
         }

@@ -169,9 +169,6 @@ pub(crate) struct SearchGaussian {
     /// coordinates of [`crate::Minimizer::steps`], empty when there are none.
     #[cfg_attr(feature = "serde", serde(default))]
     pub floors: Vec<f64>,
-    /// The largest standard deviation of each coordinate: a third of its box width.
-    #[cfg_attr(feature = "serde", serde(default))]
-    pub ceilings: Vec<f64>,
 }
 
 /// A warm-up of two-point step-size adaptation (TPA: Hansen, "CMA-ES with Two-Point Step-Size
@@ -302,7 +299,6 @@ impl SearchGaussian {
             flat_bottom: 0,
             ties: false,
             floors: Vec::new(),
-            ceilings: Vec::new(),
         }
     }
 
