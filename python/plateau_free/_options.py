@@ -15,6 +15,7 @@ import os
 from typing import TYPE_CHECKING, Any, Callable, NamedTuple, Optional, Sequence, TypedDict, Union, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _native
 from ._checks import (
@@ -446,7 +447,7 @@ def _adaptive_options(
     }
 
 
-def _integrality(name: str, value: Any) -> np.ndarray:
+def _integrality(name: str, value: Any) -> npt.NDArray[np.bool_]:
     """``integrality``: a 0 or 1 (or bool) for each coordinate or one for all."""
     must = f"{name} = {_show(value)} must be 0 or 1 (or booleans) per coordinate, scipy's integrality"
     try:
@@ -460,7 +461,7 @@ def _integrality(name: str, value: Any) -> np.ndarray:
     return array.astype(bool)
 
 
-def _integral_steps(flags: np.ndarray, size: int, options: dict[str, Any]) -> list[float]:
+def _integral_steps(flags: npt.NDArray[np.bool_], size: int, options: dict[str, Any]) -> list[float]:
     """The steps of ``integrality`` for ``size`` coordinates: 1.0 an integer, 0.0 continuous."""
     if flags.ndim == 1 and flags.size != size:
         raise ValueError(

@@ -56,7 +56,7 @@ pub(crate) fn snap(x: &mut [f64], steps: &[f64], bounds: Option<&(Vec<f64>, Vec<
 /// steps, `None` when no multiple lies inside.
 fn snap_one(v: f64, s: f64, lo: f64, hi: f64) -> Option<f64> {
     let k = (v / s).round();
-    if !(k.abs() < LARGEST_MULTIPLE) {
+    if k.is_nan() || k.abs() >= LARGEST_MULTIPLE {
         return Some(v);
     }
     let mut on = k * s;
@@ -66,7 +66,8 @@ fn snap_one(v: f64, s: f64, lo: f64, hi: f64) -> Option<f64> {
     if on > hi {
         on = multiple(hi, s, f64::floor);
     }
-    (lo..=hi).contains(&on).then_some(on)
+    // `+ 0.0` writes a rounded negative zero as zero.
+    (lo..=hi).contains(&on).then_some(on + 0.0)
 }
 
 /// The multiple of `s` next to the bound `b`, on the side `side` rounds to (a bound beyond
@@ -89,8 +90,9 @@ mod tests {
         let bounds = (vec![-0.4, 0.0, -1e9], vec![2.6, 1.0, 1e9]);
         let mut x = [-0.4, 0.74, 3.3];
         snap(&mut x, &[1.0, 0.25, 0.0], Some(&bounds));
-        // -0.4 rounds to -0.0, inside; 0.74 to 0.75; the continuous coordinate stays.
+        // -0.4 rounds to 0 (not -0), inside; 0.74 to 0.75; the continuous coordinate stays.
         assert_eq!(x, [0.0, 0.75, 3.3]);
+        assert!(x[0].is_sign_positive());
         let mut x = [2.6];
         snap(&mut x, &[1.0], Some(&(vec![-0.4], vec![2.6])));
         // 3 is outside: the largest integer inside.
