@@ -118,23 +118,51 @@ def one(task: tuple[str, int, int, int, str, int]) -> dict[str, Any]:
 
 
 def ranges(text: str) -> list[int]:
-    """``1-5,7`` as ``[1, 2, 3, 4, 5, 7]``."""
+    """``1-5,7`` as ``[1, 2, 3, 4, 5, 7]`` (positive integers; argparse's type)."""
     out: list[int] = []
-    for part in text.split(","):
-        lo, _, hi = part.partition("-")
-        out += list(range(int(lo), int(hi or lo) + 1))
+    try:
+        for part in text.split(","):
+            lo, _, hi = part.partition("-")
+            out += list(range(int(lo), int(hi or lo) + 1))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a list of numbers and ranges like 1-5,7")
+    if not out or min(out) < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} names no positive number")
     return out
 
 
+def positive(text: str) -> int:
+    """A positive integer (argparse's type)."""
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer")
+    return int(text)
+
+
+def solver_list(text: str) -> list[str]:
+    """Solver names, comma-separated (argparse's type)."""
+    names = text.split(",")
+    unknown = [s for s in names if s not in SOLVERS]
+    if unknown:
+        raise argparse.ArgumentTypeError(f"unknown solvers {unknown}: choose from {list(SOLVERS)}")
+    return names
+
+
+def suite_list(text: str) -> list[str]:
+    names = text.split(",")
+    if any(s not in ("bbob", "bbob-mixint") for s in names):
+        raise argparse.ArgumentTypeError(f"{text!r}: the suites are bbob and bbob-mixint")
+    return names
+
+
 def tasks(a: argparse.Namespace, done: set[tuple]) -> Iterator[tuple]:
-    for name in a.suites.split(","):
-        solvers = a.solvers.split(",")
+    for name in a.suites:
+        solvers = a.solvers
         if name == "bbob":  # nothing to declare: the declared run and CMAwM are the box's
             solvers = [s for s in solvers if s not in ("minimize-int", "pycma-int", "cmawm")]
         # The largest dimensions first, so that the slowest runs are not left for the end.
-        for n in sorted(ranges(a.dims), reverse=True):
-            for fid in ranges(a.functions):
-                for inst in ranges(a.instances):
+        for n in sorted(a.dims, reverse=True):
+            for fid in a.functions:
+                for inst in a.instances:
                     for solver in solvers:
                         key = (name, fid, n, inst, solver, a.budget * n)
                         if key not in done:
@@ -142,9 +170,6 @@ def tasks(a: argparse.Namespace, done: set[tuple]) -> Iterator[tuple]:
 
 
 def run_main(a: argparse.Namespace) -> None:
-    unknown = set(a.solvers.split(",")) - set(SOLVERS)
-    if unknown:
-        sys.exit(f"unknown solvers {sorted(unknown)}: choose from {list(SOLVERS)}")
     out = Path(a.runs) / "runs.jsonl"
     out.parent.mkdir(parents=True, exist_ok=True)
     done = set()
@@ -167,13 +192,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
     r = sub.add_parser("run", help="make the runs of a grid (resumes)")
-    r.add_argument("--suites", default="bbob-mixint,bbob")
-    r.add_argument("--dims", default="5,10,20", help="e.g. 5,10,20,40")
-    r.add_argument("--functions", default="1-24")
-    r.add_argument("--instances", default="1-5")
-    r.add_argument("--solvers", default=",".join(SOLVERS))
-    r.add_argument("--budget", type=int, default=1000, help="evaluations per dimension")
-    r.add_argument("--jobs", type=int, default=2, help="processes (default 2)")
+    r.add_argument("--suites", type=suite_list, default="bbob-mixint,bbob")
+    r.add_argument("--dims", type=ranges, default="5,10,20", help="e.g. 5,10,20,40")
+    r.add_argument("--functions", type=ranges, default="1-24")
+    r.add_argument("--instances", type=ranges, default="1-5")
+    r.add_argument("--solvers", type=solver_list, default=",".join(SOLVERS))
+    r.add_argument("--budget", type=positive, default=1000,
+                   help="evaluations per dimension (default 1000)")
+    r.add_argument("--jobs", type=positive, default=2, help="processes (default 2)")
     r.add_argument("--runs", default=DEFAULT_RUNS, help="folder of runs.jsonl")
     p = sub.add_parser("page", help="write the page from the runs")
     p.add_argument("--runs", default=DEFAULT_RUNS)

@@ -5,7 +5,6 @@ solver's best value reached within its budget, per dimension and per function gr
 from __future__ import annotations
 
 import json
-from collections import defaultdict
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
