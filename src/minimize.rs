@@ -91,6 +91,7 @@ impl<F> fmt::Debug for Minimizer<F> {
             .field("seed", &o.seed)
             .field("sigma0", &o.sigma0)
             .field("bounds", &o.bounds)
+            .field("steps", &o.steps)
             .field("target", &o.target)
             .field("population", &o.population)
             .field("restarts", &o.restarts)
@@ -169,6 +170,41 @@ impl<F> Minimizer<F> {
         /// `f64::INFINITY` above) leaves that side open; the default starting spread comes
         /// from the finite widths only.
         bounds(lower: Vec<f64>, upper: Vec<f64>) => options.bounds = Some((lower, upper));
+
+        /// Discrete coordinates: one step per coordinate, `0.0` for a continuous one and
+        /// `s > 0` for the grid of multiples `k s` (`1.0`: the integers), as a run with
+        /// bounds gives one spread per coordinate ([`Minimizer::sigma0_each`]). Every point
+        /// handed to `f` (the start included) and so the result have each such coordinate on
+        /// its grid: the search's draws are rounded to the nearest multiple after they are
+        /// clamped onto [`Minimizer::bounds`], and to the nearest multiple inside the box if
+        /// that one is outside (so the box must hold a multiple on every discrete coordinate;
+        /// `[0.5, 3.5]` with step 1 holds 1, 2, 3). The search learns from the unrounded draws
+        /// and keeps the spread along a discrete coordinate above a floor tied to its step
+        /// (`docs/integers.md`). A coordinate more than `2^52` steps from zero is left as
+        /// given: floats there are already spaced at least a step apart.
+        ///
+        /// ```
+        /// use plateau_free::Minimizer;
+        ///
+        /// // Integers in [0, 10] and one continuous coordinate.
+        /// let f = |x: &[f64]| (x[0] - 3.0).powi(2) + (x[1] - 7.0).powi(2) + (x[2] - 0.25).powi(2);
+        /// let best = Minimizer::new(f)
+        ///     .steps(vec![1.0, 1.0, 0.0])
+        ///     .bounds(vec![0.0; 3], vec![10.0; 3])
+        ///     .budget(3000)
+        ///     .run(&[5.5, 5.5, 5.5])?;
+        /// assert_eq!(&best.x[..2], &[3.0, 7.0]);
+        /// assert!((best.x[2] - 0.25).abs() < 1e-4);
+        /// # Ok::<(), plateau_free::Error>(())
+        /// ```
+        ///
+        /// # Errors
+        /// (At [`Minimizer::run`] and [`Minimizer::ask_tell`].) A step that is negative, NaN
+        /// or infinite, a number of steps other than the dimension, a box with no multiple
+        /// of a step between a coordinate's bounds ([`Error::InvalidParameter`],
+        /// [`Error::LengthMismatch`]), or steps with [`Strategy::Paper`], whose loop takes
+        /// continuous steps.
+        steps(steps: Vec<f64>) => options.steps = Some(steps);
 
         /// Stop as soon as `f` reaches `target` or below: after the iteration (the adaptive
         /// search's generation, the paper loop's gradient estimate) that saw such a value,

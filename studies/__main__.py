@@ -40,6 +40,8 @@ STUDIES: dict[str, tuple[str, str]] = {
     "stopping-bbob": ("studies.stopping.bbob",
                       "minimize's stop rules on bbob: targets reached against evaluations spent "
                       "(docs/results/stopping-bbob.md)"),
+    "coco": ("studies.coco.main",
+             "minimize and its peers on COCO's bbob and bbob-mixint suites (docs/results/coco.md)"),
     "peers": ("studies.peers.peers",
               "pycma's BIPOP-CMA-ES and nevergrad's NGOpt on examples/compare's instances "
               "(scripts/compare-peers)"),

@@ -15,6 +15,7 @@ import os
 from typing import TYPE_CHECKING, Any, Callable, NamedTuple, Optional, Sequence, TypedDict, Union, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _native
 from ._checks import (
@@ -54,6 +55,7 @@ class Options(TypedDict, total=False):
     seed: Optional[int]
     sigma0: Union[float, Sequence[float], None]
     bounds: Optional[_Bounds]
+    integrality: Any
     args: Any
     batched: bool
     seeded: bool
@@ -134,6 +136,14 @@ _OPTIONS: dict[str, _Option] = {
         side open (``(None, 2)``); ``x0`` must lie inside. Adaptive and polished: every
         evaluated point is projected onto the box. The paper's loop: Adam projects after
         every step."""),
+    "integrality": _row(lambda name, value: _integrality(name, value), frozenset({"adaptive"}),
+                        "array of 0 and 1, optional", """
+        Adaptive: which coordinates are integers, scipy's convention (``integrality`` of
+        ``scipy.optimize.milp`` and ``differential_evolution``): 1 an integer, 0 continuous,
+        one per coordinate of ``x0`` (flattened) or one for all. Every point handed to ``fun``,
+        ``x0`` included, and ``result.x`` have those coordinates rounded to integers inside
+        ``bounds`` (which must hold an integer on each); the spread along them keeps a floor
+        (``Minimizer::steps``, docs/integers.md)."""),
     "args": _row(_arguments, _ALL, "tuple, optional", """
         Extra arguments of ``fun``, as scipy's: ``fun(x, *args)`` (``fun(x, seed, *args)``
         when seeded).""", ask_tell=False),
@@ -357,6 +367,8 @@ def _check_call(
     start = _start(x0)
     if "bounds" in given:
         checked["bounds"] = _box(given["bounds"], start, x0)
+    if "integrality" in checked:
+        checked["integrality"] = _integral_steps(checked["integrality"], start.size, options)
     spread = checked.get("sigma0")
     if isinstance(spread, list):
         if chosen != "adaptive":
@@ -433,7 +445,32 @@ def _adaptive_options(
         "stall": checked.get("stop_when_stalled"),
         "on_failure": checked.get("on_failure", "continue"),
         "patience": checked.get("patience"),
+        "steps": checked.get("integrality"),
     }
+
+
+def _integrality(name: str, value: Any) -> npt.NDArray[np.bool_]:
+    """``integrality``: a 0 or 1 (or bool) for each coordinate or one for all."""
+    must = f"{name} = {_show(value)} must be 0 or 1 (or booleans) per coordinate, scipy's integrality"
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError) as e:
+        raise _native.OptionTypeError(must) from e
+    if array.dtype.kind not in "biuf" or array.ndim > 1:
+        raise _native.OptionTypeError(must)
+    if not np.all((array == 0) | (array == 1)):
+        raise ValueError(must)
+    return array.astype(bool)
+
+
+def _integral_steps(flags: npt.NDArray[np.bool_], size: int, options: dict[str, Any]) -> list[float]:
+    """The steps of ``integrality`` for ``size`` coordinates: 1.0 an integer, 0.0 continuous."""
+    if flags.ndim == 1 and flags.size != size:
+        raise ValueError(
+            f"integrality = {_show(options['integrality'])} has {flags.size} entries, x0 has "
+            f"{size} coordinates: give one per coordinate or one for all"
+        )
+    return [1.0 if f else 0.0 for f in np.broadcast_to(flags, (size,))]
 
 
 def _polished_options(checked: dict[str, Any]) -> _native._AdaptiveOptions:

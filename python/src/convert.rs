@@ -252,6 +252,8 @@ pub(crate) struct AdaptiveOptions {
     on_failure: String,
     /// `Minimizer::patience`: converged restarts back at the best point that end the run.
     patience: Option<usize>,
+    /// `Minimizer::steps` (from `integrality=`: 1.0 an integer, 0.0 continuous).
+    steps: Option<Vec<f64>>,
 }
 
 impl AdaptiveOptions {
@@ -270,6 +272,7 @@ impl AdaptiveOptions {
         let minimizer = maybe(minimizer, self.sigma0, RsMinimizer::sigma0);
         let minimizer = maybe(minimizer, self.sigma0_each, RsMinimizer::sigma0_each);
         let minimizer = maybe(minimizer, self.patience, RsMinimizer::patience);
+        let minimizer = maybe(minimizer, self.steps, RsMinimizer::steps);
         let minimizer = maybe(minimizer, self.bounds, |m, (lower, upper)| {
             m.bounds(lower, upper)
         });

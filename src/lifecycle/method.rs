@@ -223,6 +223,7 @@ impl AskAndTell for AskTell {
             ("restarts", o.restarts.to_string()),
             ("mirrored", o.mirrored.to_string()),
             ("flat_growth", o.flat_growth.to_string()),
+            ("steps", format!("{:?}", o.steps)),
             ("metric", format!("{:?}", o.metric)),
             ("restart_from_best", o.restart_from_best.to_string()),
             ("polish", format!("{:?}", o.polish)),

@@ -236,6 +236,10 @@ impl AskTell {
 
     pub(crate) fn new(options: Options, x0: &[f64]) -> Result<AskTell, Error> {
         let budget = options.check(x0)?;
+        // With discrete coordinates the start is rounded onto their grid first.
+        let mut start = x0.to_vec();
+        options.snap(&mut start);
+        let x0 = &start[..];
         let method = match options.strategy {
             Strategy::Adaptive => Method::Adaptive(Box::new(
                 Adaptive::new(&options, x0).judged(&options, budget),

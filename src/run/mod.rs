@@ -7,9 +7,11 @@
 //! - `history.rs`: what the paper's loop gives back and continues from ([`History`],
 //!   [`OptimizerState`], [`RunError`]);
 //! - `ask.rs`: the points of one ask ([`Ask`]) and the checks of told values;
-//! - `stall.rs`: the stop rule ([`Stall`]): a run ends when its best value stopped improving.
+//! - `stall.rs`: the stop rule ([`Stall`]): a run ends when its best value stopped improving;
+//! - `grid.rs`: discrete coordinates (`crate::Minimizer::steps`): their checks and rounding.
 
 mod ask;
+mod grid;
 mod history;
 mod minimum;
 mod options;

@@ -123,6 +123,9 @@ pub(crate) struct Options {
     /// [`crate::Minimizer::patience`] (0: off).
     #[cfg_attr(feature = "serde", serde(default))]
     pub(crate) patience: usize,
+    /// [`crate::Minimizer::steps`]: a step per coordinate, 0 continuous.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub(crate) steps: Option<Vec<f64>>,
 }
 
 impl Default for Options {
@@ -145,6 +148,7 @@ impl Default for Options {
             on_failure: FailurePolicy::default(),
             patience: DEFAULT_PATIENCE,
             sigma0_each: None,
+            steps: None,
         }
     }
 }
@@ -157,6 +161,14 @@ impl Options {
             (Some(fraction), _) => fraction,
             (None, Strategy::Paper { .. }) => DEFAULT_POLISH,
             (None, Strategy::Adaptive) => 0.0,
+        }
+    }
+
+    /// `x` rounded onto the grid of [`crate::Minimizer::steps`] inside the bounds (as is
+    /// without steps).
+    pub(crate) fn snap(&self, x: &mut [f64]) {
+        if let Some(steps) = &self.steps {
+            super::grid::snap(x, steps, self.bounds.as_ref());
         }
     }
 
@@ -229,6 +241,16 @@ impl Options {
                     name: "sigma0_each",
                     value: each[0].into(),
                     reason: "and sigma0 both set the starting spread: set one",
+                });
+            }
+        }
+        if let Some(steps) = &self.steps {
+            super::grid::check(steps, n, self.bounds.as_ref())?;
+            if self.strategy != Strategy::Adaptive {
+                return Err(Error::InvalidParameter {
+                    name: "steps",
+                    value: steps.len().into(),
+                    reason: "(discrete coordinates) need Strategy::Adaptive: the paper's loop takes continuous steps",
                 });
             }
         }

@@ -15,7 +15,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use crate::error::Error;
 use crate::objective::Points;
 use crate::run::{Ask, Ledger, Metric, Minimum, Options, Stall, Stop, FULL_METRIC_MAX_DIM};
-use gaussian::{rng, Params, SearchGaussian};
+use gaussian::{floors, rng, Params, SearchGaussian};
 use repeats::Repeats;
 
 /// The adaptive search between asks: `Minimizer`'s loop over runs and generations, unrolled.
@@ -164,6 +164,9 @@ impl Adaptive {
             }
             dist.mirrored = o.mirrored;
             dist.flat_growth = o.flat_growth;
+            if let Some(steps) = &o.steps {
+                dist.floors = floors(steps, self.lambda);
+            }
             dist
         });
         let mut ys = dist.sample(&mut self.rng).ys;
@@ -184,6 +187,11 @@ impl Adaptive {
                     *y = (&x - &dist.mean) / dist.sigma;
                 }
             }
+            // Discrete coordinates are rounded for the evaluation only: the update learns
+            // from the continuous offset, so that the spread along such a coordinate is
+            // the search's, not the rounding's (which is 0 while the draws stay on the
+            // mean's tread).
+            o.snap(x.as_mut_slice());
             self.points.extend(x.iter());
         }
         if let Some(index) = self.points.iter().position(|v| !v.is_finite()) {

@@ -14,7 +14,8 @@
 //! negative weights of Jastrebski and Arnold, CEC 2006): cumulative step-size adaptation
 //! shrinks `sigma` while successive steps cancel (progress made, optimum near) and grows it
 //! while they align; the covariance learns the function's metric from the selected steps,
-//! which is what ill-conditioned and rotated problems need. There is no floor on `sigma`.
+//! which is what ill-conditioned and rotated problems need. There is no floor on `sigma`, but one on the
+//! spread along a discrete coordinate ([`crate::Minimizer::steps`], `floor.rs`).
 //! With the diagonal metric (large n) each run opens with a warm-up of two-point step-size
 //! adaptation that shrinks a start spread far too wide in `O(ln n)` generations per e-fold
 //! ([`Tpa`]), then CSA as above; a run whose warm-up drew nothing better than the best value
@@ -44,9 +45,11 @@ use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 mod ends;
+mod floor;
 mod lowrank;
 
 pub(crate) use ends::RunEnd;
+pub(crate) use floor::floors;
 use lowrank::LowRank;
 
 /// The strategy parameters for a dimension and population size (Hansen 2016, Table 1).
@@ -173,6 +176,10 @@ pub(crate) struct SearchGaussian {
     /// diagonal one; `None` for a full or a purely diagonal metric.
     #[cfg_attr(feature = "serde", serde(default))]
     low_rank: Option<LowRank>,
+    /// The least standard deviation of each coordinate (`floor.rs`): positive on the discrete
+    /// coordinates of [`crate::Minimizer::steps`], empty when there are none.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub floors: Vec<f64>,
 }
 
 /// A warm-up of two-point step-size adaptation (TPA: Hansen, "CMA-ES with Two-Point Step-Size
@@ -240,6 +247,9 @@ impl SearchGaussian {
         if let Some(low_rank) = &self.low_rank {
             low_rank.check(n)?;
         }
+        if !self.floors.is_empty() {
+            len("search floors", self.floors.len(), n)?;
+        }
         if let Some((cov, b)) = &self.full {
             len("search covariance", cov.nrows() * cov.ncols(), n * n)?;
             len("search eigenvectors", b.nrows() * b.ncols(), n * n)?;
@@ -303,6 +313,7 @@ impl SearchGaussian {
             flat_bottom: 0,
             ties: false,
             low_rank: None,
+            floors: Vec::new(),
         }
     }
 
@@ -594,6 +605,7 @@ impl SearchGaussian {
         if flat && !bottom && self.flat_growth {
             self.sigma *= (0.2 + cs / self.p.ds).exp();
         }
+        self.apply_floors();
         self.generation += 1;
 
         // Eigendecomposition, lazily (every ~1/(10 n (c1 + cmu)) generations).

@@ -1,0 +1,93 @@
+//! The floor on the spread along a discrete coordinate ([`crate::Minimizer::steps`]).
+//!
+//! Along a coordinate of step `s` the objective is a staircase whose treads are `s` wide.
+//! Smoothed by a Gaussian of standard deviation `sd` along it, the staircase becomes a smooth
+//! function only while `sd` is not small next to `s`: below, the smoothed function is flat
+//! across the tread the mean stands on (its gradient is the jumps at the tread's edges
+//! weighted by the kernel there, `exp(-(s / 2)^2 / (2 sd^2))` at the centre), every draw
+//! rounds to the same value, and ranks no longer tell directions apart. The covariance
+//! update then shrinks the coordinate further (its selected steps are no longer than the
+//! others'), and the coordinate is frozen where it stands for the rest of the run.
+//!
+//! The floor keeps the probability that a draw leaves the mean's tread, from its centre,
+//! at least `alpha = 1 / (n lambda)`: the margin of CMA-ES with margin (Hamano, Saito,
+//! Nomura and Shirakawa, GECCO 2022), one coordinate's change in about every `n`
+//! generations. From the centre a draw leaves when `|N(0, sd^2)| > s / 2`, so
+//! `sd >= s / (2 Phi^{-1}(1 - alpha / 2))`: about `0.2 s` for the usual populations, the
+//! bound pycma's integer handling also settles on (Marty, Semet, Auger, Hansen and Tran,
+//! 2024). A coordinate whose spread fell below its floor has its row and column of the
+//! covariance scaled up to it; the others keep theirs.
+
+use nalgebra::DMatrix;
+
+use super::SearchGaussian;
+use crate::kernel::normal_cdf;
+
+/// The floors of a run of `lambda` draws in dimension `n` for the steps `steps` (0 for a
+/// continuous coordinate, whose floor is 0).
+pub(crate) fn floors(steps: &[f64], lambda: usize) -> Vec<f64> {
+    let alpha = 1.0 / (steps.len() * lambda.max(1)) as f64;
+    let z = upper_quantile(alpha / 2.0);
+    steps.iter().map(|s| s / (2.0 * z)).collect()
+}
+
+/// `Phi^{-1}(1 - p)` for `p` in `(0, 1/2]`, by bisection on [`normal_cdf`] (once per run).
+fn upper_quantile(p: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0, 40.0);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if normal_cdf(-mid) > p {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+impl SearchGaussian {
+    /// Raises every coordinate's standard deviation `sigma sqrt(C_ii)` to its floor (see
+    /// the module), scaling the covariance's rows and columns; the full metric is then
+    /// decomposed again.
+    pub(super) fn apply_floors(&mut self) {
+        if self.floors.is_empty() {
+            return;
+        }
+        let mut scale = vec![1.0; self.n];
+        let mut raised = false;
+        for (i, &floor) in self.floors.iter().enumerate() {
+            let sd = self.sigma * self.variance(i).sqrt();
+            if floor > 0.0 && sd < floor && sd > 0.0 {
+                scale[i] = floor / sd;
+                raised = true;
+            }
+        }
+        if !raised {
+            return;
+        }
+        match &mut self.full {
+            Some((cov, _)) => {
+                let d = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(scale));
+                *cov = &d * &*cov * &d;
+                self.decompose();
+            }
+            None => self.d.iter_mut().zip(&scale).for_each(|(d, s)| *d *= s),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_floor_keeps_the_margin_of_leaving_the_tread() {
+        assert!((upper_quantile(0.025) - 1.959_964).abs() < 1e-5);
+        let f = floors(&[0.0, 1.0, 2.0], 10);
+        assert_eq!(f[0], 0.0);
+        // A draw from the tread's centre leaves it with probability 1 / (n lambda).
+        let leave = 2.0 * normal_cdf(-0.5 / f[1]);
+        assert!((leave - 1.0 / 30.0).abs() < 1e-9, "{leave}");
+        assert_eq!(f[2], 2.0 * f[1]);
+    }
+}

@@ -1,0 +1,140 @@
+"""The solvers of the COCO harness, each called as ``solve(f, box)``: ``f`` is the problem
+behind a counter that ends the run (raises ``Done``) once the budget is spent or the final
+target ``f_opt + 1e-8`` reached; ``box`` is the problem's bounds, its integer variables and
+the run's seed. Every solver gets the same budget, the same start (COCO's
+``initial_solution``) and the same box; the counter counts every evaluation alike.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+
+class Done(Exception):
+    """The budget is spent or the final target reached: the run ends here."""
+
+
+@dataclass
+class Box:
+    x0: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    integers: int  # the first ``integers`` variables are integers (bbob-mixint's layout)
+    budget: int
+    seed: int
+    target: float  # f_opt + 1e-8
+
+    @property
+    def flags(self) -> list[int]:
+        n = self.x0.size
+        return [1] * self.integers + [0] * (n - self.integers)
+
+    @property
+    def spread(self) -> tuple[float, np.ndarray]:
+        """A fifth of the mean box width and each coordinate's width relative to the mean:
+        every peer's starting spread (pycma's sigma0 and ``CMA_stds``, CMAwM's sigma and
+        covariance)."""
+        widths = self.upper - self.lower
+        mean = float(np.mean(widths))
+        return 0.2 * mean, widths / mean
+
+
+def minimize_box(f: Callable, box: Box) -> None:
+    """``plateau_free.minimize`` with the box, nothing declared."""
+    import plateau_free
+
+    plateau_free.minimize(f, box.x0, bounds=list(zip(box.lower, box.upper)), budget=box.budget,
+                          seed=box.seed, target=box.target)
+
+
+def minimize_int(f: Callable, box: Box) -> None:
+    """``plateau_free.minimize`` with the box and ``integrality=`` the integer variables."""
+    import plateau_free
+
+    plateau_free.minimize(f, box.x0, bounds=list(zip(box.lower, box.upper)), budget=box.budget,
+                          seed=box.seed, target=box.target, integrality=box.flags)
+
+
+def minimize_plain(f: Callable, box: Box) -> None:
+    """``plateau_free.minimize(f, x0, budget=, seed=)``: the README's call, no box."""
+    import plateau_free
+
+    plateau_free.minimize(f, box.x0, budget=box.budget, seed=box.seed, target=box.target)
+
+
+def _pycma(f: Callable, box: Box, integer: bool) -> None:
+    import warnings
+
+    with warnings.catch_warnings():  # pycma's note that matplotlib is missing (no plots here)
+        warnings.simplefilter("ignore")
+        import cma
+
+    sigma0, stds = box.spread
+    options = {
+        "bounds": [list(box.lower), list(box.upper)],
+        "CMA_stds": list(stds),
+        "maxfevals": box.budget,
+        "ftarget": box.target,
+        "seed": box.seed + 1,  # pycma's seed 0 is a random one
+        "verbose": -9,
+    }
+    if integer and box.integers:
+        options["integer_variables"] = list(range(box.integers))
+    cma.fmin2(f, list(box.x0), sigma0, options, restarts=9, bipop=True)
+
+
+def pycma_box(f: Callable, box: Box) -> None:
+    """pycma 4.5's BIPOP-CMA-ES with the box."""
+    _pycma(f, box, integer=False)
+
+
+def pycma_int(f: Callable, box: Box) -> None:
+    """pycma's BIPOP-CMA-ES with the box and ``integer_variables``."""
+    _pycma(f, box, integer=True)
+
+
+def cmawm(f: Callable, box: Box) -> None:
+    """``cmaes.CMAwM`` (CMA-ES with margin) with the box and the integer steps, restarted with
+    a doubled population (IPOP) whenever it stops, until the budget is spent."""
+    from cmaes import CMAwM
+
+    sigma0, stds = box.spread
+    steps = np.array(box.flags, dtype=float)
+    bounds = np.column_stack([box.lower, box.upper])
+    popsize = 4 + int(3 * np.log(box.x0.size))
+    restart = 0
+    while True:
+        es = CMAwM(mean=box.x0.copy(), sigma=sigma0, bounds=bounds, steps=steps,
+                   seed=box.seed + restart, population_size=popsize, cov=np.diag(stds**2))
+        while not es.should_stop():
+            told = []
+            for _ in range(es.population_size):
+                x_eval, x_tell = es.ask()
+                told.append((x_tell, f(x_eval)))
+            es.tell(told)
+        restart += 1
+        popsize *= 2
+
+
+def random_search(f: Callable, box: Box) -> None:
+    """Uniform points in the box, integer variables rounded."""
+    rng = np.random.default_rng(box.seed)
+    flags = np.array(box.flags, dtype=bool)
+    while True:
+        x = rng.uniform(box.lower, box.upper)
+        x[flags] = np.round(x[flags])
+        f(x)
+
+
+SOLVERS: dict[str, tuple[Callable[[Callable, Box], None], str]] = {
+    "minimize-int": (minimize_int, "`minimize` with the box and `integrality=`"),
+    "minimize-box": (minimize_box, "`minimize` with the box"),
+    "minimize": (minimize_plain, "`minimize(f, x0, budget=, seed=)`"),
+    "pycma-int": (pycma_int, "pycma BIPOP-CMA-ES, the box and `integer_variables`"),
+    "pycma-box": (pycma_box, "pycma BIPOP-CMA-ES, the box"),
+    "cmawm": (cmawm, "`cmaes.CMAwM` (CMA-ES with margin), IPOP restarts"),
+    "random": (random_search, "random search in the box"),
+}
