@@ -2,7 +2,8 @@
 //! crate's ask-and-tell runs.
 
 use crate::error::Error;
-use crate::method::{AskTell, BaselineAskTell, PaperAskTell};
+use crate::baseline::BaselineAskTell;
+use crate::method::{AskTell, PaperAskTell};
 use crate::run::{Ask, History, Minimum};
 use crate::vector::{LeastSquaresAskTell, VectorMinimum};
 

@@ -28,4 +28,5 @@ mod paper;
 mod polished;
 
 pub use minimizer::AskTell;
-pub use paper::{Baseline, BaselineAskTell, Optimizer, PaperAskTell};
+pub use paper::{Optimizer, PaperAskTell};
+pub(crate) use paper::Progress;

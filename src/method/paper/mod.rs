@@ -6,14 +6,12 @@
 //! Two drivers ask this engine for the next spread and tell it the estimate: the callback
 //! form (`optimize.rs`: [`Optimizer::minimize_from`], with any [`GradientEstimator`], whose
 //! estimate is one call), and ask-and-tell (`ask_tell.rs`: [`PaperAskTell`], with the
-//! plateau-free estimator split into its points and their values; `baseline.rs`:
-//! [`BaselineAskTell`], with a baseline estimator).
+//! plateau-free estimator split into its points and their values; and, in `crate::baseline`,
+//! `BaselineAskTell`, with a baseline estimator).
 
 mod ask_tell;
-mod baseline;
 
 pub use ask_tell::PaperAskTell;
-pub use baseline::{Baseline, BaselineAskTell};
 
 use crate::adam::Adam;
 use crate::anneal::Annealer;

@@ -9,8 +9,8 @@
 
 use std::cell::{Cell, RefCell};
 
-use super::{Optimizer, Progress};
-use crate::baseline::{FiniteDifference, Spsa};
+use super::{FiniteDifference, Spsa};
+use crate::method::{Optimizer, Progress};
 use crate::check;
 use crate::error::Error;
 use crate::estimator::{Estimate, GradientEstimator};

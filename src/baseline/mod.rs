@@ -12,7 +12,9 @@ use crate::estimator::{mean, Bounds, Estimate, GradientEstimator};
 use crate::objective::Objective;
 use crate::seeding::{stream_rng, stream_seed};
 
-pub use crate::method::{Baseline, BaselineAskTell};
+mod ask_tell;
+
+pub use ask_tell::{Baseline, BaselineAskTell};
 
 /// Central finite differences `(f(theta + h e_i) - f(theta - h e_i)) / 2h` with a fixed
 /// step `h`, `2n` evaluations per gradient. The spread handed in by the loop is ignored: this
