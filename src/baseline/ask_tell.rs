@@ -10,10 +10,10 @@
 use std::cell::{Cell, RefCell};
 
 use super::{FiniteDifference, Spsa};
-use crate::method::{Optimizer, Progress};
 use crate::check;
 use crate::error::Error;
 use crate::estimator::{Estimate, GradientEstimator};
+use crate::method::{Optimizer, Progress};
 use crate::objective::{Objective, Points};
 use crate::run::{count, Ask, History, OptimizerState};
 

@@ -1,8 +1,8 @@
 //! [`AskAndTell`]: what the driver needs of a method, and its implementations for the
 //! crate's ask-and-tell runs.
 
-use crate::error::Error;
 use crate::baseline::BaselineAskTell;
+use crate::error::Error;
 use crate::method::{AskTell, PaperAskTell};
 use crate::run::{Ask, History, Minimum};
 use crate::vector::{LeastSquaresAskTell, VectorMinimum};

@@ -28,5 +28,5 @@ mod paper;
 mod polished;
 
 pub use minimizer::AskTell;
-pub use paper::{Optimizer, PaperAskTell};
 pub(crate) use paper::Progress;
+pub use paper::{Optimizer, PaperAskTell};
