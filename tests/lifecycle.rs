@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
 use plateau_free::lifecycle::{
-    AskAndTell, Driver, Interrupt, Observer, Progress, ProgressLine, Trace,
+    AskAndTell, Driver, Interrupt, Observer, Progress, ProgressLine, Trace, Workers,
 };
 use plateau_free::{
     Adam, Annealer, Ask, Error, FailurePolicy, LeastSquares, Metric, Minimizer, Optimizer,
@@ -526,6 +526,54 @@ mod checkpoints {
     }
 
     #[test]
+    fn least_squares_resumes_bit_for_bit() {
+        // Residuals with failures (a NaN output past x0 > 0.8) and a box: the saved state
+        // keeps the damping, the averaged Jacobian and the failed pairs' count.
+        let r = |x: &[f64], _: u64, out: &mut [f64]| {
+            out[0] = x[0] - 1.5;
+            out[1] = if x[0] > 0.8 {
+                f64::NAN
+            } else {
+                2.0 * (x[1] + 0.5)
+            };
+            out[2] = x[0] * x[1];
+        };
+        let ls = LeastSquares::new(Sparsity::dense(3, 2).unwrap())
+            .budget(300)
+            .bounds(vec![-2.0, -2.0], vec![2.0, 2.0])
+            .seed(4);
+        let run = || ls.ask_tell(&[0.0, 0.0]).unwrap();
+        let evaluate =
+            |w: &Workers, ask: Ask<'_>, out: &mut [f64]| w.evaluate_rows(&r, ask, 3, out);
+        let alone = Driver::new().run(run(), evaluate).unwrap();
+        assert!(alone.failures > 0, "{alone:?}");
+        let path = path("least-squares.json");
+        let stop = Interrupt::new();
+        let first = Driver::new()
+            .interrupt(stop.clone())
+            .observe(StopAt(6, stop))
+            .checkpoint(Checkpoint::new(&path))
+            .run(run(), evaluate)
+            .unwrap();
+        assert!(first.nfev < alone.nfev);
+        let resumed = Driver::new()
+            .checkpoint(Checkpoint::new(&path))
+            .run(run(), evaluate)
+            .unwrap();
+        assert_eq!(resumed, alone);
+        let other = ls.clone().seed(5).ask_tell(&[0.0, 0.0]).unwrap();
+        let refused = Driver::new()
+            .checkpoint(Checkpoint::new(&path))
+            .run(other, evaluate)
+            .unwrap_err();
+        assert!(
+            refused.error.to_string().contains("options"),
+            "{}",
+            refused.error
+        );
+    }
+
+    #[test]
     fn the_paper_loop_resumes_bit_for_bit() {
         let f = |x: &[f64]| rosenbrock(x);
         let opt = || Optimizer::new(Adam::new(0.02).unwrap(), Annealer::paper(0.4, 300).unwrap());
@@ -619,12 +667,18 @@ mod checkpoints {
             failure.error
         );
         // A method with no saved form is refused before it begins.
-        let ls = LeastSquares::new(Sparsity::dense(1, 1).unwrap()).budget(50);
-        let r = |x: &[f64], _: u64, out: &mut [f64]| out[0] = x[0];
+        let walk = Walk {
+            x: vec![0.0],
+            iterations: 10,
+            done: 0,
+            best: f64::INFINITY,
+            seeds: [0],
+        };
         let failure = Driver::new()
-            .checkpoint(Checkpoint::new(path.with_extension("ls")))
-            .run(ls.ask_tell(&[1.0]).unwrap(), |w, ask, out| {
-                w.evaluate_rows(&r, ask, 1, out)
+            .checkpoint(Checkpoint::new(path.with_extension("walk")))
+            .run(walk, |_, _, out| {
+                out[0] = 1.0;
+                Ok::<(), Error>(())
             })
             .unwrap_err();
         assert!(failure.result.is_none());

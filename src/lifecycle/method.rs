@@ -131,14 +131,15 @@ fn vector_identity(x: &[f64]) -> String {
     if x.len() <= 8 {
         return format!("{x:?}");
     }
-    // FNV-1a over the bits: the same vector, the same text.
-    let hash = x.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, v| {
-        v.to_bits()
-            .to_le_bytes()
-            .iter()
-            .fold(h, |h, b| (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3))
-    });
-    format!("dimension {} (hash {hash:016x})", x.len())
+    let bytes: Vec<u8> = x.iter().flat_map(|v| v.to_bits().to_le_bytes()).collect();
+    format!("dimension {} (hash {:016x})", x.len(), fnv1a(&bytes))
+}
+
+/// FNV-1a over `bytes`: the same input, the same hash.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3)
+    })
 }
 
 /// `save` and `load` of a serialisable method, as JSON.
@@ -339,5 +340,35 @@ impl AskAndTell for LeastSquaresAskTell {
 
     fn so_far(&self) -> VectorMinimum {
         self.result()
+    }
+
+    fn identity(&self) -> Vec<(&'static str, String)> {
+        // The options include the sparsity pattern, of any size: long text goes by its hash.
+        let options = format!("{:?}", self.options());
+        let options = match options.len() {
+            0..=400 => options,
+            len => format!("{len} characters (hash {:016x})", fnv1a(options.as_bytes())),
+        };
+        vec![("x0", vector_identity(self.theta())), ("options", options)]
+    }
+
+    #[cfg(feature = "serde")]
+    fn save(&self, out: &mut Vec<u8>) -> Result<(), Error> {
+        serde_json::to_writer(out, self).map_err(|e| Error::Checkpoint {
+            path: String::new(),
+            reason: format!("state not written: {e}"),
+        })
+    }
+
+    #[cfg(feature = "serde")]
+    fn restore(&mut self, bytes: &[u8]) -> Result<(), Error> {
+        let run: LeastSquaresAskTell =
+            serde_json::from_slice(bytes).map_err(|e| Error::Checkpoint {
+                path: String::new(),
+                reason: format!("damaged state: {e}"),
+            })?;
+        run.check()?;
+        *self = run;
+        Ok(())
     }
 }

@@ -3,28 +3,13 @@
 
 use super::jacobian::{check_outputs, draw, pair_seed, Accumulator};
 use super::solve::damped_step;
-use super::Sparsity;
+use super::{Acceptance, Sparsity};
 use crate::check;
 use crate::error::Error;
 use crate::objective::Points;
 use crate::run::{Ask, FailurePolicy};
 use crate::seeding::stream_seed;
 use crate::{Annealer, PAPER_SIGMA_MIN};
-
-/// When a Gauss-Newton step is taken.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Acceptance {
-    /// The step's point is evaluated (one evaluation, with the seed every such point gets:
-    /// common random numbers) and taken when its sum of squares is not larger than the
-    /// current point's; a tie is taken, so a flat objective does not stop the run. A refused
-    /// step raises the damping and is tried again, shorter (after
-    /// [`LeastSquares::max_rejections`], the Jacobian is estimated again with fresh draws).
-    #[default]
-    Descent,
-    /// Every step is taken (its point still evaluated, for the result): the smoothed model
-    /// alone decides, as the scalar method's Adam step does.
-    Always,
-}
 
 /// Options of the vector (least-squares) method: minimise `sum_i r_i(x)^2` for a black-box
 /// `r: R^n -> R^m`, from values of `r` alone, by damped Gauss-Newton steps on the
@@ -62,6 +47,7 @@ pub enum Acceptance {
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LeastSquares {
     sparsity: Sparsity,
     budget: usize,
@@ -72,6 +58,7 @@ pub struct LeastSquares {
     acceptance: Acceptance,
     max_rejections: usize,
     cg_iterations: usize,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::float_box"))]
     bounds: Option<(Vec<f64>, Vec<f64>)>,
     seed: u64,
     smoothed_residuals: bool,
@@ -319,6 +306,7 @@ pub struct VectorMinimum {
 
 /// What the next ask evaluates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 enum Phase {
     /// The start.
     Start,
@@ -349,24 +337,28 @@ enum Phase {
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LeastSquaresAskTell {
     opts: LeastSquares,
     annealer: Annealer,
     phase: Phase,
     pending: bool,
     theta: Vec<f64>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::float"))]
     fun: f64,
     residuals: Vec<f64>,
     /// The averaged Jacobian, on the pattern's entries, and how many estimates it holds.
     jac: Vec<f64>,
     jac_count: usize,
     smoothed: Vec<f64>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::float"))]
     lambda: f64,
     rejections: usize,
     /// The ask's points, seeds and (for pairs) perturbations, flat.
     points: Vec<f64>,
     seeds: Vec<u64>,
     taus: Vec<f64>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::saved::float"))]
     sigma: f64,
     nfev: usize,
     nit: usize,
@@ -678,5 +670,24 @@ impl LeastSquaresAskTell {
     /// The outputs of `r` told per point (the pattern's rows).
     pub fn outputs(&self) -> usize {
         self.opts.sparsity.outputs()
+    }
+
+    /// The options of the run.
+    pub fn options(&self) -> &LeastSquares {
+        &self.opts
+    }
+
+    /// A read-back run's vectors against its pattern's sizes.
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self) -> Result<(), Error> {
+        let (m, n, len) = (
+            self.outputs(),
+            self.opts.sparsity.params(),
+            crate::check::len,
+        );
+        len("theta", self.theta.len(), n)?;
+        len("jacobian", self.jac.len(), self.opts.sparsity.nnz())?;
+        len("points", self.points.len(), self.seeds.len() * n)?;
+        len("residuals", self.residuals.len() % m.max(1), 0)
     }
 }

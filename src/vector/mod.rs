@@ -23,11 +23,13 @@
 //! residuals that are not smooth at the scale of sigma (then the linear model of the
 //! smoothed residuals is poor, as for any Gauss-Newton method).
 
+mod acceptance;
 mod gauss_newton;
 mod jacobian;
 mod solve;
 mod sparsity;
 
-pub use gauss_newton::{Acceptance, LeastSquares, LeastSquaresAskTell, VectorMinimum};
+pub use acceptance::Acceptance;
+pub use gauss_newton::{LeastSquares, LeastSquaresAskTell, VectorMinimum};
 pub use jacobian::{smoothed_jacobian, JacobianEstimate};
 pub use sparsity::Sparsity;

@@ -21,6 +21,7 @@ use crate::error::Error;
 /// # Ok::<(), plateau_free::Error>(())
 /// ```
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Sparsity {
     outputs: usize,
     params: usize,
@@ -29,6 +30,7 @@ pub struct Sparsity {
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 struct Rows {
     starts: Vec<usize>,
     cols: Vec<u32>,
