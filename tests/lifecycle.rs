@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
 use plateau_free::lifecycle::{
-    AskAndTell, Driver, Interrupt, Observer, Progress, ProgressLine, Trace, Workers,
+    AskAndTell, Driver, Interrupt, Observer, Progress, ProgressLine, Trace,
 };
 use plateau_free::{
     Adam, Annealer, Ask, Error, FailurePolicy, LeastSquares, Metric, Minimizer, Optimizer,
@@ -403,7 +403,7 @@ fn dimension_one_and_a_huge_dimension() {
 #[cfg(feature = "serde")]
 mod checkpoints {
     use super::*;
-    use plateau_free::lifecycle::Checkpoint;
+    use plateau_free::lifecycle::{Checkpoint, Workers};
     use plateau_free::Minimum;
 
     /// A fresh file name in the temporary directory.
