@@ -8,7 +8,7 @@ pub enum Acceptance {
     /// common random numbers) and taken when its sum of squares is not larger than the
     /// current point's; a tie is taken, so a flat objective does not stop the run. A refused
     /// step raises the damping and is tried again, shorter (after
-    /// [`LeastSquares::max_rejections`], the Jacobian is estimated again with fresh draws).
+    /// [`crate::LeastSquares::max_rejections`], the Jacobian is estimated again with fresh draws).
     #[default]
     Descent,
     /// Every step is taken (its point still evaluated, for the result): the smoothed model
