@@ -20,14 +20,14 @@ use obvhs::{bvh2::Bvh2, ray::Ray};
 
 /// Deepest stack a traversal needs; a tree needing more is not converted (the caller keeps
 /// obvhs's traversal). The CUP mug needs about 20, SORT's boxes about 10.
-const STACK: usize = 64;
+pub(super) const STACK: usize = 64;
 
 /// One child of a pair: a leaf (`count` primitives from `first`) or an inner node whose
 /// children are the pair `first` (`count` = 0).
 #[derive(Clone, Copy, Debug, Default)]
-struct Child {
-    first: u32,
-    count: u32,
+pub(super) struct Child {
+    pub(super) first: u32,
+    pub(super) count: u32,
 }
 
 /// Two sibling nodes: their boxes per axis as (left min, right min, left max, right max).
@@ -39,14 +39,14 @@ struct Pair {
 }
 
 /// The ray as the pair test needs it: origin and inverse direction splat per axis.
-struct Splat {
-    o: [Vec4; 3],
-    inv: [Vec4; 3],
+pub(super) struct Splat {
+    pub(super) o: [Vec4; 3],
+    pub(super) inv: [Vec4; 3],
 }
 
 impl Splat {
     #[inline(always)]
-    fn new(ray: &Ray) -> Self {
+    pub(super) fn new(ray: &Ray) -> Self {
         let (o, i) = (ray.origin, ray.inv_direction);
         Self {
             o: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],

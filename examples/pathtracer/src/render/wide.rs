@@ -15,16 +15,8 @@
 use glam::{Vec3A, Vec4};
 use obvhs::{aabb::Aabb, bvh2::Bvh2, ray::Ray};
 
-/// Deepest stack a traversal needs; a tree needing more is not converted (the caller keeps
-/// another traversal). Each node pushes at most three children.
-const STACK: usize = 64;
-
-/// One child: a leaf (`count` primitives from `first`) or an inner node `first` (`count` = 0).
-#[derive(Clone, Copy, Debug, Default)]
-struct Child {
-    first: u32,
-    count: u32,
-}
+// The child record, the splat ray and the stack depth are the pair layout's.
+use super::pairs::{Child, Splat, STACK};
 
 /// Four children's boxes, one per lane, per axis; 128 bytes, two cache lines.
 #[derive(Clone, Copy, Debug)]
@@ -33,23 +25,6 @@ struct Node {
     min: [Vec4; 3],
     max: [Vec4; 3],
     children: [Child; 4],
-}
-
-/// The ray as the node test needs it: origin and inverse direction splat per axis.
-struct Splat {
-    o: [Vec4; 3],
-    inv: [Vec4; 3],
-}
-
-impl Splat {
-    #[inline(always)]
-    fn new(ray: &Ray) -> Self {
-        let (o, i) = (ray.origin, ray.inv_direction);
-        Self {
-            o: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
-            inv: [Vec4::splat(i.x), Vec4::splat(i.y), Vec4::splat(i.z)],
-        }
-    }
 }
 
 impl Node {
