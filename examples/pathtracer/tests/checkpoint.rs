@@ -99,6 +99,13 @@ fn written() -> &'static [Vec<u8>] {
                 None,
                 None,
             ),
+            write_checkpoint(
+                "image",
+                "shadow",
+                &small("shadow", Method::Image, 3),
+                None,
+                Some(2),
+            ),
         ]
     })
 }
@@ -144,6 +151,7 @@ fn the_real_checkpoints_load_and_pass_the_fuzz_body() {
             let kind = match c.progress {
                 run::Progress::Loop(_) => "loop",
                 run::Progress::Adaptive(_) => "adaptive",
+                run::Progress::Image(_) => "image",
                 _ => "other",
             };
             assert!(!c.history.is_empty());
@@ -156,7 +164,8 @@ fn the_real_checkpoints_load_and_pass_the_fuzz_body() {
             (false, "loop"),
             (true, "adaptive"),
             (true, "loop"),
-            (true, "adaptive")
+            (true, "adaptive"),
+            (false, "image")
         ]
     );
     for bytes in seeds() {

@@ -8,8 +8,8 @@
 //! seeds ([`super::Crn`]). One row of the history per ask told (a Jacobian's pairs or a
 //! step's point), one iteration of the method: its `renders` is the count of renders so far
 //! (the axis on which methods of different iteration costs compare), `loss` and `image_mse`
-//! the current point's image MSE, `sigma` the spread of the last Jacobian. No checkpoint: the
-//! library cannot save this method, so a run of it starts over.
+//! the current point's image MSE, `sigma` the spread of the last Jacobian. Its checkpoint is
+//! the library's saved least-squares run, resumed bit for bit as the other methods' are.
 
 use std::time::Instant;
 

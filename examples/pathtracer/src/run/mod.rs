@@ -105,9 +105,6 @@ pub fn optimize_with(task: &Task, s: &Settings, ctl: Control<'_>) -> Result<Outc
         Method::Adaptive | Method::Polished => {
             Progress::Adaptive(Box::new(adaptive::search(task, s, &start)?))
         }
-        Method::Image if ctl.resume.is_some() => {
-            return Err("--method image supports no --resume (it keeps no checkpoint)".into())
-        }
         Method::Image => Progress::Image(Box::new(image::least_squares(task, s, &start)?)),
         Method::Plateau | Method::Fd | Method::Spsa => paper::progress(task, s, &start)?,
     };
@@ -170,7 +167,7 @@ pub fn optimize_with(task: &Task, s: &Settings, ctl: Control<'_>) -> Result<Outc
 }
 
 /// Runs `fresh` under the library's driver: Ctrl-C and `stop_after` end it at the next turn,
-/// the meter shows it, its checkpoint (if any; never the image method's) is written when due
+/// the meter shows it, its checkpoint (if any) is written when due
 /// and at the end. The asked points are rendered one after the other, each render on the
 /// renderer's own threads.
 fn drive(ctx: &Ctx<'_>, fresh: Tracked<'_>, ctl: &Control<'_>) -> Result<Finished> {
@@ -187,8 +184,7 @@ fn drive(ctx: &Ctx<'_>, fresh: Tracked<'_>, ctl: &Control<'_>) -> Result<Finishe
             after: ctl.stop_after,
         })
         .observe(Meter::new(task.name(), total, unit, ctl.progress));
-    let saved = !matches!(fresh.saved.progress, Progress::Image(_));
-    if let (Some(path), true) = (&ctl.checkpoint, saved) {
+    if let Some(path) = &ctl.checkpoint {
         if ctl.resume.is_none() {
             // A new run: the file of an earlier one is replaced, not continued.
             let _ = std::fs::remove_file(path);

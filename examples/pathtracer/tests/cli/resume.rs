@@ -7,7 +7,8 @@ use crate::{fresh, results, run, run_in};
 /// exits 130 with its outputs written and marked interrupted, prints the command that
 /// resumes; continued with `--resume`, it ends bit-identical to the run left alone: for the
 /// paper's loop with each renderer-seed rule, finite differences, SPSA, the adaptive search
-/// and the polished loop (stopped inside the loop; the polish runs after the resume).
+/// the polished loop (stopped inside the loop; the polish runs after the resume) and the
+/// image method.
 #[test]
 fn an_interrupted_run_resumed_equals_the_run_left_alone() {
     for (tag, extra) in [
@@ -33,6 +34,7 @@ fn an_interrupted_run_resumed_equals_the_run_left_alone() {
             "polished",
             &["--iterations", "40", "--method", "polished"][..],
         ),
+        ("image", &["--iterations", "4", "--method", "image"][..]),
         (
             "polished-half",
             &[

@@ -62,11 +62,13 @@ impl Checkpoint {
             return Err("the times must be non-negative".into());
         }
         let done = self.history.len();
-        if done > s.iterations {
-            return Err(format!(
-                "{done} history rows for {} iterations",
-                s.iterations
-            ));
+        // The image method records a row per ask told: at most one a render.
+        let rows = match self.progress {
+            Progress::Image(_) => s.samples.saturating_mul(s.iterations),
+            _ => s.iterations,
+        };
+        if done > rows {
+            return Err(format!("{done} history rows, at most {rows}"));
         }
         if let Some((i, row)) = self
             .history
@@ -83,7 +85,12 @@ impl Checkpoint {
                 self.check_search(search)?;
                 (search.dim(), done)
             }
-            Progress::Image(_) => return Err("the image method keeps no checkpoint".into()),
+            Progress::Image(m) => {
+                if m.evaluations() != self.renders {
+                    return Err("the renders are not the least-squares run's".into());
+                }
+                (m.theta().len(), done)
+            }
         };
         if iteration != done {
             return Err(format!(
@@ -103,7 +110,7 @@ impl Checkpoint {
             ));
         }
         let most = match self.progress {
-            Progress::Adaptive(_) => done + 1,
+            Progress::Adaptive(_) | Progress::Image(_) => done + 1,
             _ => 6,
         };
         if self.snapshots.len() > most {

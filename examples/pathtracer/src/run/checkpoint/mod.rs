@@ -48,8 +48,7 @@ pub enum Progress {
     Baseline(Box<BaselineAskTell>),
     /// The adaptive search and the polished loop: the library's ask-and-tell run.
     Adaptive(Box<AskTell>),
-    /// The image method: never saved (a run of it starts over).
-    #[serde(skip)]
+    /// The image method: the library's least-squares run asked and told.
     Image(Box<LeastSquaresAskTell>),
 }
 
