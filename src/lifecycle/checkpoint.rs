@@ -41,9 +41,11 @@ enum Every {
     Iterations(usize),
 }
 
-/// A run saved to a file (feature `serde`): by a [`crate::lifecycle::Driver`], every
+/// A run saved to a file (feature `serde`): by a [`crate::lifecycle::Driver`], at the start
+/// (so that a path that cannot be written fails before any evaluation), every
 /// [`CHECKPOINT_SECONDS`] (or every `k` iterations) and at every end (done, interrupted),
-/// atomically ([`replace_file`]). When the driver starts and the file exists, the run
+/// atomically ([`replace_file`]). A write that fails during the run is told to the
+/// observers ([`crate::lifecycle::Observer::not_saved`]) and the run goes on. When the driver starts and the file exists, the run
 /// resumes from it: the file's settings are compared with the run given
 /// ([`AskAndTell::identity`]: `x0`, `budget`, `seed`, `strategy`, the other options) and
 /// the first that differs is an [`Error::CheckpointMismatch`] naming it. A resumed run goes
@@ -281,10 +283,10 @@ impl Checkpoint {
         let mut bytes = serde_json::to_vec(&header).map_err(|e| self.error(e.to_string()))?;
         bytes.push(b'\n');
         bytes.extend_from_slice(state);
-        replace_file(&self.path, &bytes).map_err(|e| self.error(format!("not written: {e}")))?;
+        // A write that fails is tried again when the next one is due, not at every turn.
         self.last_save = Instant::now();
         self.last_iteration = *iteration;
-        Ok(())
+        replace_file(&self.path, &bytes).map_err(|e| self.error(format!("not written: {e}")))
     }
 
     /// The run to drive: the file's, when it exists, else `fresh`.
@@ -299,6 +301,10 @@ impl Checkpoint {
         self.resumed = self.read(&mut run)?;
         self.last_iteration = run.iteration();
         self.remember(&run)?;
+        if !self.resumed {
+            // A file that cannot be written fails the run now, before any evaluation.
+            self.write_remembered()?;
+        }
         Ok(run)
     }
 

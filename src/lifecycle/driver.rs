@@ -203,7 +203,8 @@ impl<'a> Driver<'a> {
     /// # Errors
     /// What `evaluate` returns, or the method's errors (a refused value, an overflowing
     /// point), or a checkpoint that cannot be read, belongs to another run
-    /// ([`Error::CheckpointMismatch`]) or cannot be written: a [`Failure`] with the result
+    /// ([`Error::CheckpointMismatch`]) or cannot be written at the start or the end (a
+    /// write that fails in between is told to the observers): a [`Failure`] with the result
     /// so far.
     pub fn run<M, E, V>(
         mut self,
@@ -316,13 +317,19 @@ impl<'a> Driver<'a> {
         Ok(fresh)
     }
 
-    /// Keeps the turn's end in the checkpoint, if one is set, and writes it if due.
+    /// Keeps the turn's end in the checkpoint, if one is set, and writes it if due. A write
+    /// that fails is told to the observers ([`Observer::not_saved`]), and the run goes on:
+    /// a full disk must not end hours of work that the file cannot keep anyway.
     fn save_when_due<M: AskAndTell>(&mut self, method: &M) -> Result<(), Error> {
         #[cfg(feature = "serde")]
         if let Some(checkpoint) = &mut self.checkpoint {
             checkpoint.remember(method)?;
             if checkpoint.due(method.iteration()) {
-                return checkpoint.write_remembered();
+                if let Err(error) = checkpoint.write_remembered() {
+                    for observer in &mut self.observers {
+                        observer.not_saved(&error);
+                    }
+                }
             }
         }
         let _ = method;

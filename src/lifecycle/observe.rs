@@ -4,6 +4,8 @@
 use std::io::Write;
 use std::time::{Duration, Instant};
 
+use crate::Error;
+
 /// Where a run stands after an iteration: what an [`Observer`] sees.
 ///
 /// ```
@@ -72,6 +74,14 @@ pub trait Observer {
     fn end(&mut self, progress: &Progress) {
         let _ = progress;
     }
+
+    /// When a checkpoint due during the run could not be written (a full disk, a folder
+    /// removed): the run goes on, the file written last stays the one to resume from, and
+    /// the next write tries again. A run ends on this only at its end, when the last write
+    /// fails.
+    fn not_saved(&mut self, error: &Error) {
+        let _ = error;
+    }
 }
 
 impl<O: Observer + ?Sized> Observer for &mut O {
@@ -81,6 +91,10 @@ impl<O: Observer + ?Sized> Observer for &mut O {
 
     fn end(&mut self, progress: &Progress) {
         (**self).end(progress);
+    }
+
+    fn not_saved(&mut self, error: &Error) {
+        (**self).not_saved(error);
     }
 }
 
@@ -168,5 +182,10 @@ impl<W: Write> Observer for ProgressLine<W> {
 
     fn end(&mut self, progress: &Progress) {
         self.write("end: ", progress);
+    }
+
+    fn not_saved(&mut self, error: &Error) {
+        let _ = writeln!(self.out, "warning: {error}; the run goes on");
+        let _ = self.out.flush();
     }
 }

@@ -122,6 +122,11 @@ impl Observer for Meter {
     fn end(&mut self, _progress: &Progress) {
         self.bar.finish_and_clear();
     }
+
+    fn not_saved(&mut self, error: &plateau_free::Error) {
+        self.bar
+            .suspend(|| eprintln!("warning: {error}; the run goes on"));
+    }
 }
 
 /// The seconds between plain lines: [`LINE_SECONDS_VAR`]'s if it is a number >= 0, else

@@ -205,7 +205,17 @@ fn drive(ctx: &Ctx<'_>, fresh: Tracked<'_>, ctl: &Control<'_>) -> Result<Finishe
         }
         Ok::<(), plateau_free::Error>(())
     });
-    finished.map_err(|failure| failure.error.into())
+    match finished {
+        // The last write failed (a full disk): the run is whole, its outputs still count.
+        Err(failure) if matches!(failure.error, plateau_free::Error::Checkpoint { .. }) => {
+            let Some(result) = failure.result else {
+                return Err(failure.error.into());
+            };
+            eprintln!("warning: {}", failure.error);
+            Ok(*result)
+        }
+        finished => finished.map_err(|failure| failure.error.into()),
+    }
 }
 
 /// Asks the driver to stop the run after the current iteration, on Ctrl-C or once `after`
