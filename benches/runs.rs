@@ -16,7 +16,7 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use plateau_free::{Adam, Annealer, Minimizer, Optimizer, PlateauFreeGradient, Strategy};
+use plateau_free::{run::Strategy, Adam, Annealer, Minimizer, Optimizer, PlateauFreeGradient};
 
 const N: usize = 10;
 

@@ -128,7 +128,7 @@ impl Adam {
     }
 
     /// The moment estimates and the step count: what a saved run needs to continue with the
-    /// same steps (see [`crate::OptimizerState`]).
+    /// same steps (see [`crate::run::OptimizerState`]).
     ///
     /// ```
     /// use plateau_free::Adam;

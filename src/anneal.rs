@@ -16,7 +16,7 @@ use crate::error::Error;
 /// same kebab-case names.
 ///
 /// ```
-/// use plateau_free::Schedule;
+/// use plateau_free::anneal::Schedule;
 /// let paper = Schedule::WarmLinear { warmup: 0.5 };
 /// assert_eq!(paper.to_string(), "warm-linear:0.5");
 /// assert_eq!("warm-linear:0.5".parse::<Schedule>()?, paper);
@@ -49,7 +49,7 @@ impl Schedule {
     /// Checks the schedule's own parameter (the warm-up fraction must lie in `[0, 1)`).
     ///
     /// ```
-    /// use plateau_free::Schedule;
+    /// use plateau_free::anneal::Schedule;
     /// assert!(Schedule::WarmLinear { warmup: 1.0 }.validate().is_err());
     /// assert!(Schedule::Cosine.validate().is_ok());
     /// ```

@@ -97,7 +97,7 @@ pub enum Error {
     /// a real number (see [`ParameterValue`]).
     ///
     /// ```
-    /// use plateau_free::{Error, Minimizer, ParameterValue};
+    /// use plateau_free::{Error, Minimizer, error::ParameterValue};
     /// let e = Minimizer::new(|x: &[f64]| x[0]).budget(0).run(&[1.0]).unwrap_err();
     /// assert_eq!(e.to_string(), "budget = 0 is invalid: must be at least 1 evaluation");
     /// assert!(matches!(e, Error::InvalidParameter { value: ParameterValue::Integer(0), .. }));
@@ -261,7 +261,7 @@ pub enum Error {
 /// bits (`lr = 0.5`, `sigma0 = 1.0`, `sigma0 = 1e-300`, `NaN`, `inf`).
 ///
 /// ```
-/// use plateau_free::ParameterValue;
+/// use plateau_free::error::ParameterValue;
 /// assert_eq!(ParameterValue::from(3usize).to_string(), "3");
 /// assert_eq!(ParameterValue::from(0.5).to_string(), "0.5");
 /// assert_eq!(ParameterValue::from(1.0).to_string(), "1.0");

@@ -52,7 +52,7 @@ impl HessianEstimate {
 /// ```
 /// // f = x0^2 + 3 x0 x1: the smoothed Hessian of a quadratic is its Hessian, [[2, 3], [3, 0]].
 /// let f = |x: &[f64]| x[0] * x[0] + 3.0 * x[0] * x[1];
-/// let h = plateau_free::smoothed_hessian(f, &[0.5, -1.0], 0.3, 4000, 1)?;
+/// let h = plateau_free::hessian::smoothed_hessian(f, &[0.5, -1.0], 0.3, 4000, 1)?;
 /// assert!((h.get(0, 1) - 3.0).abs() < 5.0 * h.standard_error[1]);
 /// # Ok::<(), plateau_free::Error>(())
 /// ```

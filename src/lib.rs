@@ -29,9 +29,9 @@
 //!   [`Minimizer::polish`] runs the paper's loop and then this search from its best point
 //!   (what the path-tracing tasks run by default).
 //! - [`PlateauFreeGradient`]: the estimator for any `Fn(&[f64]) -> f64`, a seeded closure
-//!   ([`Seeded`], for common random numbers), a batch closure ([`Batch`]) or any
+//!   ([`Seeded`](objective::Seeded), for common random numbers), a batch closure ([`Batch`](objective::Batch)) or any
 //!   [`Objective`]; returns an [`Estimate`].
-//! - [`smoothed_hessian`]: the Hessian of the Gaussian-smoothed objective from values of `f`
+//! - [`smoothed_hessian`](hessian::smoothed_hessian): the Hessian of the Gaussian-smoothed objective from values of `f`
 //!   (antithetic pairs and a control variate), with standard errors.
 //! - [`Sampling`]: `Radial` (default, exact in every dimension), `PerCoordinate` (the paper's
 //!   reference sampler), `Gaussian` (plain evolution strategies).
@@ -40,17 +40,17 @@
 //! - [`Adam`]: with optional box bounds, which are the run's box: the start must lie inside,
 //!   and every point the estimator evaluates is clamped onto it
 //!   ([`GradientEstimator::set_bounds`]).
-//! - [`Optimizer`]: the loop, with an observer and a [`History`] (of the last million
-//!   iterations by default, so that memory stays bounded: [`HistoryKeep`]).
-//! - [`OptimizerState`]: a run's state as a value, to save and continue from
+//! - [`Optimizer`]: the loop, with an observer and a [`History`](run::History) (of the last million
+//!   iterations by default, so that memory stays bounded: [`HistoryKeep`](run::HistoryKeep)).
+//! - [`OptimizerState`](run::OptimizerState): a run's state as a value, to save and continue from
 //!   ([`Optimizer::minimize_from`]); an error mid-run returns it with the history so far
-//!   ([`RunError`]). A failing objective is reported, resampled ([`OnFailure`]) or, with
+//!   ([`RunError`](run::RunError)). A failing objective is reported, resampled ([`OnFailure`](estimator::OnFailure)) or, with
 //!   [`PlateauFreeGradient::catch_panics`], caught; see `docs/reliability.md`.
 //! - [`AskTell`] ([`Minimizer::ask_tell`]) and [`PaperAskTell`] ([`Optimizer::ask_tell`]):
 //!   ask and tell, for points evaluated elsewhere (a queue, a game engine, a render farm).
 //!   [`Ask`] gives an iteration's points and one seed per point; `tell` takes their values
 //!   and takes the step. The callback forms are written on them: the same options and seed
-//!   give the same bits ([`NoObjective`] stands in for the objective a run does not need).
+//!   give the same bits ([`NoObjective`](objective::NoObjective) stands in for the objective a run does not need).
 //! - [`lifecycle`]: a run's lifecycle for every ask-and-tell method, written once: a
 //!   [`lifecycle::Driver`] (an interrupt, observers such as a progress line and a bounded
 //!   trace, workers bit-identical to one, a checkpoint to resume from) and
@@ -58,21 +58,21 @@
 //! - `argmin` (feature `argmin`): the estimate as [argmin](https://argmin-rs.org)'s
 //!   `Gradient`, so that its steepest descent and L-BFGS run on plateau-ridden functions.
 //! - [`LeastSquares`]: for an objective that returns many numbers (a residual image): the
-//!   Gaussian-smoothed Jacobian by Stein's identity on a [`Sparsity`] pattern
-//!   ([`smoothed_jacobian`]) and damped Gauss-Newton steps on the smoothed residuals, as ask
-//!   and tell ([`LeastSquaresAskTell`]) or with a callback; see the [`vector`] module.
+//!   Gaussian-smoothed Jacobian by Stein's identity on a [`Sparsity`](vector::Sparsity) pattern
+//!   ([`smoothed_jacobian`](vector::smoothed_jacobian)) and damped Gauss-Newton steps on the smoothed residuals, as ask
+//!   and tell ([`LeastSquaresAskTell`](vector::LeastSquaresAskTell)) or with a callback; see the [`vector`] module.
 //! - [`baseline`]: finite differences and SPSA, for comparison on the same loop.
 //! - [`kernel`]: the Gaussian kernel, the inverse CDF of its derivative, `c_n`.
 //! - [`seeding`]: how every random stream is seeded (SplitMix64 of the seed, the estimate's
 //!   index and the stream), for objectives that derive seeds of their own.
 //! - [`Error`]: every way an input can be wrong, with the value as it was given
-//!   ([`ParameterValue`]). Nothing here panics on bad input; a bad configuration is reported
+//!   ([`ParameterValue`](error::ParameterValue)). Nothing here panics on bad input; a bad configuration is reported
 //!   by [`PlateauFreeGradient::validate`] where it is made.
 //!
-//! [`Sampling`] and [`Schedule`] print and parse under one spelling each (`radial`,
+//! [`Sampling`] and [`Schedule`](anneal::Schedule) print and parse under one spelling each (`radial`,
 //! `per-coordinate`, `gaussian`; `constant`, `warm-linear:0.5`, `exponential`, `cosine`).
 //! The optional feature `serde` derives `Serialize` and `Deserialize` for them (under the
-//! same names) and for [`Estimate`] and [`History`], and makes a run's whole state a value:
+//! same names) and for [`Estimate`] and [`History`](run::History), and makes a run's whole state a value:
 //! [`AskTell`] and [`PaperAskTell`], saved at any tell and read back, go on bit for bit.
 //!
 //! ## Example
@@ -123,48 +123,41 @@ mod builder;
 // observers, workers, checkpoint).
 // No module imports one that imports it back (scripts/module-cycles); the module map with
 // every file is in docs/design.md.
-mod adam;
-mod anneal;
+pub mod adam;
+pub mod anneal;
 #[cfg(feature = "argmin")]
 pub mod argmin;
 pub mod baseline;
 mod check;
-mod error;
-mod estimator;
-mod hessian;
+pub mod error;
+pub mod estimator;
+pub mod hessian;
 pub mod kernel;
 pub mod lifecycle;
 mod method;
 mod minimize;
 mod names;
-mod objective;
+pub mod objective;
 mod optimize;
-mod run;
+pub mod run;
 mod sampling;
 #[cfg(feature = "serde")]
 mod saved;
 pub mod seeding;
 pub mod vector;
 
-pub use adam::{Adam, AdamMoments};
-pub use anneal::{Annealer, Schedule, PAPER_SIGMA_MIN, PAPER_WARMUP};
-pub use error::{Error, ParameterValue};
-pub use estimator::{Estimate, GradientEstimator, OnFailure, PlateauFreeGradient};
-pub use hessian::{smoothed_hessian, HessianEstimate};
+// The crate in one screen: what a first program names. Everything else is in the modules
+// above, by what it is part of.
+pub use adam::Adam;
+pub use anneal::Annealer;
+pub use error::Error;
+pub use estimator::{Estimate, GradientEstimator, PlateauFreeGradient};
 pub use method::{AskTell, Optimizer, PaperAskTell};
 pub use minimize::{minimize, Minimizer};
-pub use objective::{Batch, NoObjective, Objective, Points, Seeded};
-pub use optimize::Step;
-pub use run::{
-    Ask, FailurePolicy, History, HistoryKeep, Metric, Minimum, OptimizerState, RunError, Stall,
-    Stop, Strategy, DEFAULT_PATIENCE, DEFAULT_POLISH, FULL_METRIC_LIMIT, FULL_METRIC_MAX_DIM,
-    STALL_WINDOW,
-};
+pub use objective::Objective;
+pub use run::{Ask, Minimum, Stop};
 pub use sampling::Sampling;
-pub use vector::{
-    smoothed_jacobian, Acceptance, JacobianEstimate, LeastSquares, LeastSquaresAskTell, Sparsity,
-    VectorMinimum,
-};
+pub use vector::LeastSquares;
 
 /// The README's examples, compiled and run as doctests so that they stay true.
 #[doc = include_str!("../README.md")]

@@ -76,7 +76,7 @@ pub fn minimize<F: Fn(&[f64]) -> f64>(f: F, x0: &[f64], budget: usize) -> Result
 ///
 /// # Determinism
 /// The result is a function of the objective, `x0`, the options and the seed alone. An
-/// [`Objective`] that takes a seed ([`crate::Seeded`]) receives the same seed for every point
+/// [`Objective`] that takes a seed ([`crate::objective::Seeded`]) receives the same seed for every point
 /// of an iteration (common random numbers), a new one each iteration.
 pub struct Minimizer<F> {
     objective: F,
@@ -106,8 +106,8 @@ impl<F> fmt::Debug for Minimizer<F> {
 }
 
 impl<F: Objective> Minimizer<F> {
-    /// A minimiser of `objective`: any `Fn(&[f64]) -> f64`, a [`crate::Seeded`] or
-    /// [`crate::Batch`] closure (a batch objective receives a whole iteration's points at
+    /// A minimiser of `objective`: any `Fn(&[f64]) -> f64`, a [`crate::objective::Seeded`] or
+    /// [`crate::objective::Batch`] closure (a batch objective receives a whole iteration's points at
     /// once), or your own [`Objective`].
     pub fn new(objective: F) -> Self {
         Minimizer {
@@ -155,7 +155,7 @@ impl<F> Minimizer<F> {
 
         /// How many restarts in a row must converge back at the best point seen before them
         /// for the run to be done ([`Stop::Done`], a success) before its budget (default
-        /// [`crate::DEFAULT_PATIENCE`]; 0: the budget, the target or the stall rule alone end
+        /// [`crate::run::DEFAULT_PATIENCE`]; 0: the budget, the target or the stall rule alone end
         /// the run). A converged restart is one that ended with its spread, its values or its
         /// flat bottom below its own precision; "back at the best point" means its best value
         /// within that precision of the best seen before it, and its mean within a few of its
@@ -239,7 +239,7 @@ impl<F> Minimizer<F> {
 
         /// With [`Strategy::Paper`]: spend the last `fraction` of the budget on the adaptive
         /// search, started at the loop's best point with the loop's last spread (default 0: the
-        /// loop alone; with [`Strategy::Paper`], [`crate::DEFAULT_POLISH`] when not set).
+        /// loop alone; with [`Strategy::Paper`], [`crate::run::DEFAULT_POLISH`] when not set).
         ///
         /// The paper's annealed loop finds the basin (its large early spread smooths plateaus
         /// away) but ends where Adam's fixed learning rate and the spread's floor leave it, about
@@ -249,7 +249,7 @@ impl<F> Minimizer<F> {
         /// renders, so the tasks now use 0.5 ("Renders to the paper's answer").
         ///
         /// ```
-        /// use plateau_free::{Minimizer, Strategy};
+        /// use plateau_free::{Minimizer, run::Strategy};
         ///
         /// // A cone, as an image loss is near its optimum: Adam's steps hover around the tip.
         /// let f = |x: &[f64]| ((x[0] - 0.3).powi(2) + (x[1] + 0.2).powi(2)).sqrt();
@@ -262,15 +262,15 @@ impl<F> Minimizer<F> {
         polish(fraction: f64) => options.polish = Some(fraction);
 
         /// Ends the run when the best value has not improved over the last `window` of the
-        /// budget (a fraction in `(0, 1]`; [`crate::STALL_WINDOW`] is the tested choice), the
-        /// rule [`crate::Stall`] with no tolerance: [`Stop::Stalled`]. Default: off, the budget
+        /// budget (a fraction in `(0, 1]`; [`crate::run::STALL_WINDOW`] is the tested choice), the
+        /// rule [`crate::run::Stall`] with no tolerance: [`Stop::Stalled`]. Default: off, the budget
         /// alone ends the run. The budget stays the ceiling. The rule sees only the values: the
         /// adaptive search is judged from its first generation; with [`Strategy::Paper`], the
         /// loop runs its whole schedule (its annealing is planned over its share of the budget)
         /// and the polish is judged from the hand-over.
         ///
         /// ```
-        /// use plateau_free::{Minimizer, Stop, STALL_WINDOW};
+        /// use plateau_free::{Minimizer, Stop, run::STALL_WINDOW};
         ///
         /// // A floor: every point with |x| < 1 is as good as the optimum. (Without the
         /// // patience rule, which would end this run first.)

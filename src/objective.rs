@@ -23,7 +23,7 @@ impl<'a> Points<'a> {
     ///
     /// ```
     /// let flat = [1.0, 2.0, 3.0, 4.0];
-    /// let points = plateau_free::Points::new(&flat, 2);
+    /// let points = plateau_free::objective::Points::new(&flat, 2);
     /// assert_eq!(points.len(), 2);
     /// assert_eq!(points.get(1), &[3.0, 4.0]);
     /// ```
@@ -96,7 +96,7 @@ impl<F: Fn(&[f64]) -> f64> Objective for F {
 /// An objective that takes a seed: `Seeded(|x: &[f64], seed: u64| render_loss(x, seed))`.
 ///
 /// ```
-/// use plateau_free::{Objective, Seeded};
+/// use plateau_free::{Objective, objective::Seeded};
 /// let noisy = Seeded(|x: &[f64], seed: u64| x[0] + (seed % 7) as f64);
 /// assert_eq!(noisy.evaluate(&[1.0], 9), 3.0);
 /// ```
@@ -114,7 +114,7 @@ impl<F: Fn(&[f64], u64) -> f64> Objective for Seeded<F> {
 /// output slice to fill.
 ///
 /// ```
-/// use plateau_free::{Batch, Objective, Points};
+/// use plateau_free::{objective::Batch, Objective, objective::Points};
 /// let sum_of_squares = Batch(|points: Points<'_>, _seeds: &[u64], out: &mut [f64]| {
 ///     for (p, o) in points.iter().zip(out.iter_mut()) {
 ///         *o = p.iter().map(|x| x * x).sum();

@@ -7,22 +7,9 @@ use std::ops::ControlFlow;
 
 use crate::adam::AdamMoments;
 use crate::error::Error;
-use crate::estimator::{Estimate, GradientEstimator};
+use crate::estimator::GradientEstimator;
 use crate::method::Optimizer;
-use crate::run::{History, OptimizerState, RunError};
-
-/// What the observer sees after each iteration.
-#[derive(Debug)]
-pub struct Step<'a> {
-    /// The iteration, counted from 0.
-    pub iteration: usize,
-    /// The parameters after this iteration's Adam step.
-    pub theta: &'a [f64],
-    /// The spread this iteration's gradient was estimated with.
-    pub sigma: f64,
-    /// The gradient estimate (taken at the parameters before the step).
-    pub estimate: &'a Estimate,
-}
+use crate::run::{History, OptimizerState, RunError, Step};
 
 impl Optimizer {
     /// Runs from `start` to the end.

@@ -5,8 +5,9 @@
 use plateau_free::baseline::{FiniteDifference, Spsa};
 use plateau_free::seeding::{mix, stream_seed};
 use plateau_free::{
-    Adam, Annealer, Batch, Error, Estimate, History, Optimizer, ParameterValue,
-    PlateauFreeGradient, Points, Sampling, Schedule, Seeded,
+    anneal::Schedule, error::ParameterValue, objective::Batch, objective::Points,
+    objective::Seeded, run::History, Adam, Annealer, Error, Estimate, Optimizer,
+    PlateauFreeGradient, Sampling,
 };
 
 fn linear(x: &[f64]) -> f64 {

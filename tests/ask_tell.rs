@@ -9,8 +9,9 @@
 use std::cell::RefCell;
 
 use plateau_free::{
-    Adam, Annealer, Batch, Error, FailurePolicy, Minimizer, OnFailure, Optimizer, OptimizerState,
-    PlateauFreeGradient, Seeded, Stop, Strategy,
+    estimator::OnFailure, objective::Batch, objective::Seeded, run::FailurePolicy,
+    run::OptimizerState, run::Strategy, Adam, Annealer, Error, Minimizer, Optimizer,
+    PlateauFreeGradient, Stop,
 };
 
 mod common;

@@ -2,7 +2,8 @@
 //! non-finite values, a result taken too early, bad options.
 
 use plateau_free::{
-    Adam, Annealer, Error, FailurePolicy, Minimizer, Optimizer, PlateauFreeGradient, Strategy,
+    run::FailurePolicy, run::Strategy, Adam, Annealer, Error, Minimizer, Optimizer,
+    PlateauFreeGradient,
 };
 
 mod common;

@@ -6,7 +6,9 @@
 //! those of the search whose spread does not grow at a flat bottom (ties at its best level
 //! with worse points around), where three such generations end a run.
 
-use plateau_free::{Batch, Minimizer, Objective, PlateauFreeGradient, Seeded};
+use plateau_free::{
+    objective::Batch, objective::Seeded, Minimizer, Objective, PlateauFreeGradient,
+};
 
 mod common;
 use common::ask_tell::*;
@@ -55,7 +57,7 @@ fn minimize_cases(
     seed: u64,
 ) -> Vec<(
     String,
-    Minimizer<plateau_free::NoObjective>,
+    Minimizer<plateau_free::objective::NoObjective>,
     Vec<f64>,
     fn(&[f64], u64) -> f64,
 )> {

@@ -3,7 +3,7 @@
 //! value changes nothing; saved through a checkpoint and resumed, the run left alone.
 
 use plateau_free::baseline::{Baseline, BaselineAskTell, FiniteDifference, Spsa};
-use plateau_free::{Adam, Annealer, Error, Optimizer, Seeded};
+use plateau_free::{objective::Seeded, Adam, Annealer, Error, Optimizer};
 
 /// A staircase with a seeded jitter: the seeds matter, and a plain gradient sees plateaus.
 fn stairs(x: &[f64], seed: u64) -> f64 {
@@ -24,7 +24,7 @@ fn optimizer(bounded: bool) -> Optimizer {
     Optimizer::new(adam, Annealer::paper(0.5, 120).unwrap())
 }
 
-fn told(mut run: BaselineAskTell) -> plateau_free::History {
+fn told(mut run: BaselineAskTell) -> plateau_free::run::History {
     while let Some(ask) = run.ask().unwrap() {
         let values: Vec<f64> = ask.iter().map(|(x, seed)| stairs(x, seed)).collect();
         run.tell(&values).unwrap();

@@ -3,7 +3,7 @@
 
 use std::cell::Cell;
 
-use plateau_free::{Error, Minimizer, Strategy, DEFAULT_POLISH};
+use plateau_free::{run::Strategy, run::DEFAULT_POLISH, Error, Minimizer};
 
 const PAPER: Strategy = Strategy::Paper {
     samples: 4,

@@ -6,7 +6,8 @@ use std::collections::HashSet;
 use std::sync::Mutex;
 
 use plateau_free::{
-    Adam, Annealer, Batch, Optimizer, PlateauFreeGradient, Points, Sampling, Seeded,
+    objective::Batch, objective::Points, objective::Seeded, Adam, Annealer, Optimizer,
+    PlateauFreeGradient, Sampling,
 };
 
 mod common;

@@ -5,8 +5,8 @@ use std::sync::Mutex;
 
 use plateau_free::baseline::{FiniteDifference, Spsa};
 use plateau_free::{
-    Adam, Annealer, Batch, Error, GradientEstimator, Optimizer, PlateauFreeGradient, Points,
-    Sampling, Schedule, Seeded,
+    anneal::Schedule, objective::Batch, objective::Points, objective::Seeded, Adam, Annealer,
+    Error, GradientEstimator, Optimizer, PlateauFreeGradient, Sampling,
 };
 
 fn linear(x: &[f64]) -> f64 {
@@ -435,7 +435,7 @@ fn messages_name_the_values() {
 /// number (`lr = -0.5`, not `-5e-1`).
 #[test]
 fn messages_show_values_as_written() {
-    use plateau_free::{Minimizer, ParameterValue, Strategy};
+    use plateau_free::{error::ParameterValue, run::Strategy, Minimizer};
     let f = |x: &[f64]| x[0];
     let message = |e: Error| e.to_string();
     let m = || Minimizer::new(f);
@@ -507,7 +507,7 @@ fn messages_show_values_as_written() {
 /// ask/tell; at the limit, and with the other metrics far above it, the options pass.
 #[test]
 fn the_full_metric_refuses_a_dimension_it_cannot_hold() {
-    use plateau_free::{Metric, Minimizer, ParameterValue, FULL_METRIC_LIMIT};
+    use plateau_free::{error::ParameterValue, run::Metric, run::FULL_METRIC_LIMIT, Minimizer};
     let f = |x: &[f64]| x.iter().sum::<f64>();
     let big = vec![0.0; 100_000];
     let e = Minimizer::new(f)

@@ -3,7 +3,7 @@
 //! Every method ends near its clean run's value and counts the failures; a run whose every
 //! point fails ends with `fun = inf` and `failures == evaluations`.
 
-use plateau_free::{FailurePolicy, LeastSquares, Minimizer, Sparsity, Strategy};
+use plateau_free::{run::FailurePolicy, run::Strategy, vector::Sparsity, LeastSquares, Minimizer};
 
 /// Whether `x` fails, and how: about 3 % of points, NaN, `+inf` and `-inf` in turn.
 fn failure(x: &[f64]) -> Option<f64> {

@@ -5,7 +5,8 @@ use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use plateau_free::{
-    Adam, Annealer, Error, OnFailure, Optimizer, OptimizerState, PlateauFreeGradient,
+    estimator::OnFailure, run::OptimizerState, Adam, Annealer, Error, Optimizer,
+    PlateauFreeGradient,
 };
 
 mod common;

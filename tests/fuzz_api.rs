@@ -10,8 +10,8 @@ use std::ops::ControlFlow;
 
 use plateau_free::baseline::{FiniteDifference, Spsa};
 use plateau_free::{
-    Adam, Annealer, GradientEstimator, OnFailure, Optimizer, OptimizerState, PlateauFreeGradient,
-    Sampling, Schedule,
+    anneal::Schedule, estimator::OnFailure, run::OptimizerState, Adam, Annealer, GradientEstimator,
+    Optimizer, PlateauFreeGradient, Sampling,
 };
 use proptest::prelude::*;
 
@@ -177,7 +177,7 @@ proptest! {
             return Ok(());
         }
         let start = vec![start; n];
-        let check = |h: &plateau_free::History| -> Result<(), TestCaseError> {
+        let check = |h: &plateau_free::run::History| -> Result<(), TestCaseError> {
             prop_assert!(all_finite(&h.value), "values {:?}", h.value);
             prop_assert!(h.theta.iter().all(|t| all_finite(t)));
             Ok(())
@@ -223,7 +223,7 @@ fn found_adam_step_overflow_is_refused_unchanged() {
     assert!(err.to_string().contains("-1e308"), "{err}");
     assert_eq!(theta, vec![-1e308, 1.0]);
     assert_eq!(adam.steps(), 0);
-    assert_eq!(adam.moments(), plateau_free::AdamMoments::default());
+    assert_eq!(adam.moments(), plateau_free::adam::AdamMoments::default());
 }
 
 /// Nine values of f64::MAX / 9 (rounded) summed past f64::MAX: mean_value was infinite.

@@ -8,8 +8,8 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use plateau_free::{
-    Adam, Annealer, Error, Metric, Minimizer, Minimum, OnFailure, Optimizer, PlateauFreeGradient,
-    Stop,
+    estimator::OnFailure, run::Metric, Adam, Annealer, Error, Minimizer, Minimum, Optimizer,
+    PlateauFreeGradient, Stop,
 };
 use proptest::prelude::*;
 
@@ -116,7 +116,7 @@ impl Run {
                 samples,
                 lr,
                 sigma0,
-            } => m.strategy(plateau_free::Strategy::Paper {
+            } => m.strategy(plateau_free::run::Strategy::Paper {
                 samples,
                 lr,
                 sigma0,
@@ -126,7 +126,7 @@ impl Run {
                 lr,
                 sigma0,
             } => m
-                .strategy(plateau_free::Strategy::Paper {
+                .strategy(plateau_free::run::Strategy::Paper {
                     samples,
                     lr,
                     sigma0,

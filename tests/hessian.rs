@@ -1,10 +1,10 @@
 //! `smoothed_hessian` against analytic Gaussian-smoothed Hessians, within stated standard
 //! errors (seeded: the same draws every run).
 
-use plateau_free::{smoothed_hessian, Error};
+use plateau_free::{hessian::smoothed_hessian, Error};
 
 /// Every entry within `k` standard errors of the analytic value, and the errors small.
-fn check(est: &plateau_free::HessianEstimate, exact: &[f64], k: f64, max_se: f64) {
+fn check(est: &plateau_free::hessian::HessianEstimate, exact: &[f64], k: f64, max_se: f64) {
     for (idx, ((h, se), e)) in est
         .hessian
         .iter()

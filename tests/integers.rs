@@ -4,7 +4,7 @@
 
 use std::cell::RefCell;
 
-use plateau_free::{Error, Minimizer, Strategy};
+use plateau_free::{run::Strategy, Error, Minimizer};
 
 /// Whether `v` is a multiple of the step `s` (any `v` for a continuous coordinate).
 fn on_grid(v: f64, s: f64) -> bool {
@@ -13,7 +13,7 @@ fn on_grid(v: f64, s: f64) -> bool {
 
 /// Runs `m` from `x0`, recording every point handed to `f`.
 fn recorded(
-    m: &Minimizer<plateau_free::NoObjective>,
+    m: &Minimizer<plateau_free::objective::NoObjective>,
     f: impl Fn(&[f64]) -> f64,
     x0: &[f64],
 ) -> (plateau_free::Minimum, Vec<Vec<f64>>) {

@@ -9,8 +9,8 @@ use plateau_free::lifecycle::{
     AskAndTell, Driver, Interrupt, Observer, Progress, ProgressLine, Trace,
 };
 use plateau_free::{
-    Adam, Annealer, Ask, Error, FailurePolicy, LeastSquares, Metric, Minimizer, Optimizer,
-    PlateauFreeGradient, Sparsity, Stop, Strategy,
+    run::FailurePolicy, run::Metric, run::Strategy, vector::Sparsity, Adam, Annealer, Ask, Error,
+    LeastSquares, Minimizer, Optimizer, PlateauFreeGradient, Stop,
 };
 
 /// A plain objective, as a function pointer (one type for every run of a test).
@@ -268,7 +268,11 @@ impl AskAndTell for Walk {
             return Ok(None);
         }
         self.x[0] = 1.0 / (1.0 + self.done as f64);
-        Ask::try_new(plateau_free::Points::new(&self.x, 1), &self.seeds).map(Some)
+        Ask::try_new(
+            plateau_free::objective::Points::new(&self.x, 1),
+            &self.seeds,
+        )
+        .map(Some)
     }
     fn tell(&mut self, values: &[f64]) -> Result<(), Error> {
         self.best = self.best.min(values[0]);

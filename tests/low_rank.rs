@@ -3,7 +3,7 @@
 //! coordinate axis among them) at n = 500 it ends far lower within the same budget, seeded
 //! (the directions need about 10^5 evaluations to grow; within fewer the two are alike).
 
-use plateau_free::{Metric, Minimizer};
+use plateau_free::{run::Metric, Minimizer};
 
 /// Three orthonormal dense vectors of `n` (a fixed sequence, Gram-Schmidt).
 fn long_axes(n: usize) -> Vec<Vec<f64>> {

@@ -4,7 +4,7 @@
 // Linux alone has `/proc/self/status`; CI runs on Linux, where a missing value fails the test.
 #![cfg(target_os = "linux")]
 
-use plateau_free::{Adam, Annealer, HistoryKeep, Optimizer, PlateauFreeGradient};
+use plateau_free::{run::HistoryKeep, Adam, Annealer, Optimizer, PlateauFreeGradient};
 
 /// The peak resident memory of the process so far, in kB (`VmHWM`), where `/proc` has it.
 fn peak_resident_kb() -> Option<u64> {

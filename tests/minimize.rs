@@ -2,7 +2,10 @@
 
 use std::cell::{Cell, RefCell};
 
-use plateau_free::{minimize, Error, FailurePolicy, Metric, Minimizer, Seeded, Stop, Strategy};
+use plateau_free::{
+    minimize, objective::Seeded, run::FailurePolicy, run::Metric, run::Strategy, Error, Minimizer,
+    Stop,
+};
 
 /// A staircase: the squared distance of the rounded point to an integer target.
 fn staircase(target: &[f64]) -> impl Fn(&[f64]) -> f64 + '_ {

@@ -8,7 +8,7 @@
 //! the streams, which CHANGELOG.md must then record):
 //! `PLATEAU_FREE_PRINT_PINS=1 cargo test --release --test pinned -- --nocapture`.
 
-use plateau_free::{PlateauFreeGradient, Sampling, Seeded};
+use plateau_free::{objective::Seeded, PlateauFreeGradient, Sampling};
 
 /// A deterministic, non-separable objective with a seed-dependent part, so that both the
 /// perturbed points and the seeds handed to the objective are pinned.

@@ -16,8 +16,8 @@ use std::cell::RefCell;
 
 use plateau_free::baseline::{FiniteDifference, Spsa};
 use plateau_free::{
-    Adam, Annealer, Error, GradientEstimator, History, Minimizer, Minimum, Optimizer, PaperAskTell,
-    PlateauFreeGradient, Sampling, Strategy as Method,
+    run::History, run::Strategy as Method, Adam, Annealer, Error, GradientEstimator, Minimizer,
+    Minimum, Optimizer, PaperAskTell, PlateauFreeGradient, Sampling,
 };
 use proptest::prelude::*;
 
@@ -519,7 +519,7 @@ fn a_saved_state_outside_the_box_is_refused() {
     let mut state = opt()
         .minimize_from(
             &mut PlateauFreeGradient::new(f),
-            plateau_free::OptimizerState::new(&[0.5, 0.5]).unwrap(),
+            plateau_free::run::OptimizerState::new(&[0.5, 0.5]).unwrap(),
             |s| {
                 if s.iteration == 1 {
                     std::ops::ControlFlow::Break(())

@@ -6,7 +6,7 @@ use std::ops::ControlFlow;
 
 use plateau_free::baseline::Spsa;
 use plateau_free::{
-    Adam, AdamMoments, Annealer, Error, GradientEstimator, Optimizer, OptimizerState,
+    adam::AdamMoments, run::OptimizerState, Adam, Annealer, Error, GradientEstimator, Optimizer,
     PlateauFreeGradient,
 };
 
@@ -167,7 +167,7 @@ fn a_state_survives_json_exactly() {
 /// one go; asked and told, it is the callback form.
 #[test]
 fn a_bounded_history_keeps_the_tail_and_resumes_bit_for_bit() {
-    use plateau_free::HistoryKeep;
+    use plateau_free::run::HistoryKeep;
     let run = |keep, record| {
         let mut grad = PlateauFreeGradient::new(tilted_2d).samples(4).seed(2);
         optimizer(record)

@@ -6,8 +6,8 @@
 //! both the callback and the ask-and-tell forms.
 
 use plateau_free::{
-    Adam, Annealer, Error, Minimizer, Optimizer, PlateauFreeGradient, Stall, Stop, Strategy,
-    STALL_WINDOW,
+    run::Stall, run::Strategy, run::STALL_WINDOW, Adam, Annealer, Error, Minimizer, Optimizer,
+    PlateauFreeGradient, Stop,
 };
 
 /// A deterministic noise in [0, 1) (SplitMix64 of `i`).

@@ -3,7 +3,7 @@
 //! dropped and read back, goes on bit for bit as the uninterrupted run.
 #![cfg(feature = "serde")]
 
-use plateau_free::{AskTell, Minimizer, Minimum, NoObjective, Strategy};
+use plateau_free::{objective::NoObjective, run::Strategy, AskTell, Minimizer, Minimum};
 
 /// A staircase with a plateau around the start: flat almost everywhere.
 fn f(x: &[f64]) -> f64 {

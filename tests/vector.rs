@@ -2,7 +2,10 @@
 //! the sparsity patterns, the Gauss-Newton run, and every way an input can be wrong.
 
 use plateau_free::kernel::normal_cdf;
-use plateau_free::{smoothed_jacobian, Acceptance, Error, FailurePolicy, LeastSquares, Sparsity};
+use plateau_free::{
+    run::FailurePolicy, vector::smoothed_jacobian, vector::Acceptance, vector::Sparsity, Error,
+    LeastSquares,
+};
 use proptest::prelude::*;
 
 /// The standard normal density.

@@ -22,9 +22,9 @@ pub fn variant<F: plateau_free::Objective>(
             "patience" => m.patience(v.parse().expect("patience")),
             "target" => m.target(v.parse().expect("target")),
             "metric" => m.metric(match v {
-                "full" => plateau_free::Metric::Full,
-                "diagonal" => plateau_free::Metric::Diagonal,
-                _ => plateau_free::Metric::Auto,
+                "full" => plateau_free::run::Metric::Full,
+                "diagonal" => plateau_free::run::Metric::Diagonal,
+                _ => plateau_free::run::Metric::Auto,
             }),
             other => panic!("unknown PLATEAU_FREE_VARIANT key {other}"),
         };

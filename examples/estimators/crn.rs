@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use plateau_free::seeding::mix;
-use plateau_free::{Sampling, Seeded};
+use plateau_free::{objective::Seeded, Sampling};
 
 use crate::cases::{cases, dot};
 use crate::measure::{measure, measure_relative_to, reps_for, Config};

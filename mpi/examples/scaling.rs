@@ -19,7 +19,7 @@ use std::time::{Duration, Instant};
 
 use mpi::traits::Communicator;
 use pathtracer::tasks;
-use plateau_free::{Batch, Objective, Points, Seeded};
+use plateau_free::{objective::Batch, objective::Points, objective::Seeded, Objective};
 use plateau_free_mpi::Wait;
 
 /// Points per estimate in the speed-up rows: divisible by 1, 2, 3, 4 and 6 workers.

@@ -27,7 +27,7 @@ use mpi::traits::Communicator;
 use mpi::Threading;
 use pathtracer::run::{self, Crn, Settings};
 use pathtracer::tasks::{self, param_mse, Task};
-use plateau_free::{PlateauFreeGradient, Seeded};
+use plateau_free::{objective::Seeded, PlateauFreeGradient};
 use plateau_free_mpi::Wait;
 
 /// The command line: the settings, and whether to check against the sequential run.

@@ -13,7 +13,7 @@
 //! // Run as `mpirun -n 3 program`: rank 0 optimises, ranks 1 and 2 evaluate. (`no_run`:
 //! // a doctest is one process; it cannot be started by mpirun.)
 //! use mpi::traits::Communicator;
-//! use plateau_free::{Minimizer, Seeded};
+//! use plateau_free::{Minimizer, objective::Seeded};
 //!
 //! let f = Seeded(|x: &[f64], seed: u64| x.iter().map(|v| v.round().abs()).sum::<f64>()
 //!     + (seed % 3) as f64 * 1e-3);
@@ -35,7 +35,7 @@
 //! and seeds travel as they are, every value is written at its point's index (nothing
 //! depends on the order in which replies arrive), and the optimiser on rank 0 is the one
 //! that would run alone. Non-finite values pass through unchanged, so the estimator's
-//! failure policy ([`plateau_free::OnFailure`]) sees them as it would locally.
+//! failure policy ([`plateau_free::estimator::OnFailure`]) sees them as it would locally.
 //!
 //! ## When something fails
 //! - A worker's objective panics: the worker catches the panic, reports its message to rank
@@ -65,7 +65,7 @@ use mpi::datatype::Equivalence;
 use mpi::point_to_point::{Destination, MatchedReceiveVec, Message, Source, Status};
 use mpi::topology::{Communicator, Process, Rank};
 use mpi::Tag;
-use plateau_free::{Objective, Points};
+use plateau_free::{objective::Points, Objective};
 
 /// Rank 0 to a worker: a chunk's header, `[dim, count, seed_0, ..., seed_{count-1}]`.
 const TAG_WORK: Tag = 1;

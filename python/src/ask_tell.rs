@@ -5,7 +5,7 @@
 use super::*;
 use plateau_free::baseline::Baseline;
 use plateau_free::lifecycle::AskAndTell;
-use plateau_free::{Ask, AskTell as RsAskTell, Points};
+use plateau_free::{objective::Points, Ask, AskTell as RsAskTell};
 
 /// The run behind `plateau_free.AskTell`: `plateau_free::Minimizer`'s adaptive search, or the paper's
 /// loop as `plateau_free.minimize(method='plateau')` runs it (its final evaluation included).
@@ -569,12 +569,12 @@ fn paper_dict<'py>(py: Python<'py>, p: &Paper, shape: &[usize]) -> PyResult<Boun
 
 /// `on_failure` for the paper loop's estimator: `'continue'` redraws an estimate with a
 /// failed point (up to [`FAILURE_REDRAWS`] times), `'raise'` ends the run.
-fn estimate_on_failure(policy: &str) -> PyResult<plateau_free::OnFailure> {
+fn estimate_on_failure(policy: &str) -> PyResult<plateau_free::estimator::OnFailure> {
     match policy {
-        "continue" => Ok(plateau_free::OnFailure::Resample {
+        "continue" => Ok(plateau_free::estimator::OnFailure::Resample {
             limit: FAILURE_REDRAWS,
         }),
-        "raise" => Ok(plateau_free::OnFailure::Fail),
+        "raise" => Ok(plateau_free::estimator::OnFailure::Fail),
         _ => Err(PyValueError::new_err(format!(
             "on_failure = '{policy}' is not a policy: use 'continue' or 'raise'"
         ))),

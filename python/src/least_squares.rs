@@ -4,9 +4,11 @@
 //! output vectors back.
 
 use super::*;
-use plateau_free::{Acceptance, LeastSquares, LeastSquaresAskTell, Sparsity};
+use plateau_free::{
+    vector::Acceptance, vector::LeastSquaresAskTell, vector::Sparsity, LeastSquares,
+};
 
-/// The run behind `plateau_free.least_squares`: `plateau_free::LeastSquaresAskTell`.
+/// The run behind `plateau_free.least_squares`: `plateau_free::vector::LeastSquaresAskTell`.
 ///
 /// `ask()` gives `(X, seeds)`: `X` a float64 array of shape `(k, n)`, `seeds` a uint64 array
 /// of length `k`, or None once the budget is spent. `tell(outputs)` takes `k * m` floats

@@ -26,9 +26,10 @@ use numpy::{
 };
 use plateau_free::baseline::{FiniteDifference as RsFiniteDifference, Spsa as RsSpsa};
 use plateau_free::{
-    Adam as RsAdam, Annealer as RsAnnealer, Error, FailurePolicy, GradientEstimator, HistoryKeep,
-    Minimizer as RsMinimizer, Minimum as RsMinimum, Objective, Optimizer,
-    PlateauFreeGradient as RsPlateauFreeGradient, Points, Sampling, Schedule, Stop, Strategy,
+    anneal::Schedule, objective::Points, run::FailurePolicy, run::HistoryKeep, run::Strategy,
+    Adam as RsAdam, Annealer as RsAnnealer, Error, GradientEstimator, Minimizer as RsMinimizer,
+    Minimum as RsMinimum, Objective, Optimizer, PlateauFreeGradient as RsPlateauFreeGradient,
+    Sampling, Stop,
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -94,10 +95,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_rust_reference_minimize, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_reference_minimize_adaptive, m)?)?;
     m.add_function(wrap_pyfunction!(_rust_seconds_per_evaluation, m)?)?;
-    m.add("PAPER_SIGMA_MIN", plateau_free::PAPER_SIGMA_MIN)?;
-    m.add("PAPER_WARMUP", plateau_free::PAPER_WARMUP)?;
-    m.add("STALL_WINDOW", plateau_free::STALL_WINDOW)?;
-    m.add("DEFAULT_POLISH", plateau_free::DEFAULT_POLISH)?;
+    m.add("PAPER_SIGMA_MIN", plateau_free::anneal::PAPER_SIGMA_MIN)?;
+    m.add("PAPER_WARMUP", plateau_free::anneal::PAPER_WARMUP)?;
+    m.add("STALL_WINDOW", plateau_free::run::STALL_WINDOW)?;
+    m.add("DEFAULT_POLISH", plateau_free::run::DEFAULT_POLISH)?;
     m.add(
         "CHECKPOINT_SECONDS",
         plateau_free::lifecycle::CHECKPOINT_SECONDS,

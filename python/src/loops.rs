@@ -4,7 +4,7 @@
 
 use plateau_free::baseline::BaselineAskTell;
 use plateau_free::lifecycle::AskAndTell;
-use plateau_free::{Ask, Error, Estimate, History, PaperAskTell};
+use plateau_free::{run::History, Ask, Error, Estimate, PaperAskTell};
 
 /// The paper's loop with either estimator. Untagged in its saved form: a run saved before
 /// baselines were asked and told reads back as the plateau-free one.

@@ -54,7 +54,7 @@ pub(crate) fn _rust_reference_estimates<'py>(
         }};
     }
     if seeded {
-        estimates!(plateau_free::Seeded(bumpy_seeded));
+        estimates!(plateau_free::objective::Seeded(bumpy_seeded));
     } else {
         estimates!(bumpy);
     }
@@ -141,7 +141,7 @@ pub(crate) fn _rust_reference_minimize_adaptive<'py>(
         }};
     }
     let best = if seeded {
-        run!(plateau_free::Seeded(staircase_seeded))
+        run!(plateau_free::objective::Seeded(staircase_seeded))
     } else {
         run!(staircase)
     };

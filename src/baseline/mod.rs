@@ -206,7 +206,7 @@ impl<F: Objective> Spsa<F> {
 
 /// What both baselines hold: the objective; the seed and the count of estimates, which name
 /// each estimate's random streams (the count is the stream position that an
-/// [`crate::OptimizerState`] records); scratch space for the points evaluated.
+/// [`crate::run::OptimizerState`] records); scratch space for the points evaluated.
 struct Common<F> {
     objective: F,
     seed: u64,

@@ -80,8 +80,8 @@ impl<F> fmt::Debug for PlateauFreeGradient<F> {
 }
 
 impl<F: Objective> PlateauFreeGradient<F> {
-    /// The estimator for `objective`: any `Fn(&[f64]) -> f64`, a [`crate::Seeded`] or
-    /// [`crate::Batch`] closure, or your own [`Objective`].
+    /// The estimator for `objective`: any `Fn(&[f64]) -> f64`, a [`crate::objective::Seeded`] or
+    /// [`crate::objective::Batch`] closure, or your own [`Objective`].
     #[must_use]
     pub fn new(objective: F) -> Self {
         PlateauFreeGradient {
@@ -152,7 +152,7 @@ impl<F> PlateauFreeGradient<F> {
 
         /// Whether a panic inside `f` is caught and returned as [`Error::ObjectivePanicked`]
         /// (default: off, the panic unwinds through the caller). In an [`crate::Optimizer`] run
-        /// the error comes with the state of the last good iteration ([`crate::RunError`]).
+        /// the error comes with the state of the last good iteration ([`crate::run::RunError`]).
         ///
         /// ```
         /// use plateau_free::{Error, PlateauFreeGradient};
@@ -314,7 +314,7 @@ impl<F: Objective> PlateauFreeGradient<F> {
 impl<F: Objective + Sync> PlateauFreeGradient<F> {
     /// Whether the `N` evaluations of one estimate run in parallel on rayon's thread pool
     /// (default: off, since a renderer usually parallelises within one evaluation already).
-    /// Results are bit-for-bit those of the sequential run. A [`crate::Batch`] objective is
+    /// Results are bit-for-bit those of the sequential run. A [`crate::objective::Batch`] objective is
     /// then called once per point; leave this off for batch objectives.
     #[must_use]
     pub fn parallel(mut self, parallel: bool) -> Self {

@@ -1,9 +1,12 @@
-//! `PlateauFreeGradient`: the Monte Carlo estimate of the Gaussian-smoothed gradient.
-//!
-//! This file holds what the estimator's parts share: the public [`Estimate`], [`OnFailure`]
-//! and [`GradientEstimator`], and the estimator's state ([`Core`], its settings and scratch
-//! space). `gradient.rs` is the public builder and callback form, `engine.rs` the steps of
-//! one estimate, `steps.rs` the arithmetic of those steps, `evaluate.rs` the calls of `f`.
+//! The estimator of the Gaussian-smoothed gradient: [`PlateauFreeGradient`], the
+//! plateau-free estimate for any [`crate::Objective`]; the [`Estimate`] it returns; what an
+//! estimate does when `f` fails ([`OnFailure`]); and [`GradientEstimator`], the interface the
+//! paper's loop drives (the baselines of [`crate::baseline`] implement it too).
+
+// This file holds what the estimator's parts share: the public types above and the
+// estimator's state (`Core`: its settings and scratch space). `gradient.rs` is the public
+// builder and callback form, `engine.rs` the steps of one estimate, `steps.rs` the
+// arithmetic of those steps, `evaluate.rs` the calls of `f`.
 
 use std::any::Any;
 
@@ -59,7 +62,7 @@ impl Estimate {
 /// What an estimate does when `f` returns NaN or an infinity.
 ///
 /// ```
-/// use plateau_free::{OnFailure, PlateauFreeGradient};
+/// use plateau_free::{estimator::OnFailure, PlateauFreeGradient};
 /// // NaN on a quarter of the line: the estimate redraws until every value is finite.
 /// let f = |x: &[f64]| if x[0].fract().abs() < 0.25 { f64::NAN } else { x[0] };
 /// let mut grad = PlateauFreeGradient::new(f).on_failure(OnFailure::Resample { limit: 50 });
@@ -97,7 +100,7 @@ pub trait GradientEstimator {
 
     /// Where the estimator's random streams stand: the number of estimates drawn so far, or
     /// `None` for an estimator without seeded streams (the default). A saved
-    /// [`crate::OptimizerState`] records it so that a resumed run draws what the
+    /// [`crate::run::OptimizerState`] records it so that a resumed run draws what the
     /// uninterrupted run would have drawn.
     fn stream_position(&self) -> Option<u64> {
         None

@@ -23,7 +23,7 @@ use crate::run::Ask;
 ///
 /// ```
 /// use plateau_free::lifecycle::Driver;
-/// use plateau_free::{Error, FailurePolicy, Minimizer};
+/// use plateau_free::{Error, run::FailurePolicy, Minimizer};
 ///
 /// // f gives NaN from its 30th call on, and the policy raises.
 /// let calls = std::sync::atomic::AtomicUsize::new(0);
@@ -186,7 +186,7 @@ impl<'a> Driver<'a> {
     ///
     /// ```
     /// use plateau_free::lifecycle::Driver;
-    /// use plateau_free::{LeastSquares, Sparsity};
+    /// use plateau_free::{LeastSquares, vector::Sparsity};
     ///
     /// let r = |x: &[f64], _seed: u64, out: &mut [f64]| {
     ///     out[0] = x[0] - 1.0;

@@ -1,6 +1,6 @@
 //! A run's lifecycle, written once for every method: a [`Driver`] runs any ask-and-tell
 //! method ([`AskAndTell`]: [`crate::AskTell`], [`crate::PaperAskTell`],
-//! [`crate::LeastSquaresAskTell`]) with an objective. Each turn it checks the
+//! [`crate::vector::LeastSquaresAskTell`]) with an objective. Each turn it checks the
 //! [`Interrupt`], asks, evaluates the points (on [`Workers`]), tells, shows the
 //! [`Observer`]s and, with the `serde` feature, writes the [`Checkpoint`] when it is due.
 //!

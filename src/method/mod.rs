@@ -5,7 +5,7 @@
 //! - `paper/`: the paper's loop ([`Optimizer`]: annealed spread, gradient estimate, Adam's
 //!   step), and [`PaperAskTell`], the loop asked and told point by point;
 //! - `adaptive/`: the adaptive search (a Gaussian search distribution with restarts);
-//! - `polished.rs`: [`crate::Strategy::Paper`] in a [`crate::Minimizer`] run: the paper's
+//! - `polished.rs`: [`crate::run::Strategy::Paper`] in a [`crate::Minimizer`] run: the paper's
 //!   loop, then (with [`crate::Minimizer::polish`]) the adaptive search from its best point;
 //! - `minimizer.rs`: [`AskTell`], a [`crate::Minimizer`] run: its start, then the
 //!   strategy's method.
@@ -17,7 +17,7 @@
 //! bits (`tests/ask_tell.rs`, `tests/ask_tell_pinned.rs`).
 //!
 //! Each ask gives the points (rows of `n`) and one seed per point: the seeds the
-//! [`crate::Seeded`] and [`crate::Batch`] forms of the objective receive. Each tell takes
+//! [`crate::objective::Seeded`] and [`crate::objective::Batch`] forms of the objective receive. Each tell takes
 //! one value per point, in the points' order, and finishes the iteration. A failed `tell`
 //! changes nothing: the points still wait for their values (for the one exception, see
 //! [`PaperAskTell::tell`]).

@@ -13,7 +13,7 @@ use crate::objective::Points;
 use crate::run::{Ask, FailurePolicy, Ledger, Minimum, Options, Stop};
 // For the documentation's links only.
 #[cfg(doc)]
-use crate::{Minimizer, Strategy};
+use crate::{run::Strategy, Minimizer};
 
 /// Mixed into the seed for the polish's random stream, so that it is not the loop's.
 const POLISH_STREAM: u64 = 0x706f_6c69_7368_0001;

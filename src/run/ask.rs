@@ -18,7 +18,7 @@ impl<'a> Ask<'a> {
     }
 
     /// The seed of every point, for an objective with randomness of its own (common random
-    /// numbers): the seeds a [`crate::Seeded`] or [`crate::Batch`] objective would receive.
+    /// numbers): the seeds a [`crate::objective::Seeded`] or [`crate::objective::Batch`] objective would receive.
     pub fn seeds(&self) -> &'a [u64] {
         self.seeds
     }
@@ -50,7 +50,7 @@ impl<'a> Ask<'a> {
     ///
     /// ```
     /// let flat = [1.0, 2.0, 3.0, 4.0];
-    /// let ask = plateau_free::Ask::try_new(plateau_free::Points::new(&flat, 2), &[7, 7])?;
+    /// let ask = plateau_free::Ask::try_new(plateau_free::objective::Points::new(&flat, 2), &[7, 7])?;
     /// assert_eq!((ask.len(), ask.dim()), (2, 2));
     /// # Ok::<(), plateau_free::Error>(())
     /// ```

@@ -80,7 +80,7 @@ impl History {
 /// theta.
 ///
 /// ```
-/// use plateau_free::{Adam, Annealer, HistoryKeep, Optimizer, PlateauFreeGradient};
+/// use plateau_free::{Adam, Annealer, run::HistoryKeep, Optimizer, PlateauFreeGradient};
 ///
 /// let mut grad = PlateauFreeGradient::new(|x: &[f64]| x[0] * x[0]);
 /// let mut opt = Optimizer::new(Adam::new(0.1)?, Annealer::constant(0.1, 100)?)
@@ -120,7 +120,7 @@ impl Default for HistoryKeep {
 ///
 /// ```
 /// use std::ops::ControlFlow;
-/// use plateau_free::{Adam, Annealer, Optimizer, OptimizerState, PlateauFreeGradient};
+/// use plateau_free::{Adam, Annealer, Optimizer, run::OptimizerState, PlateauFreeGradient};
 ///
 /// let f = |x: &[f64]| (x[0] - 1.0).abs();
 /// let new_opt = || Optimizer::new(Adam::new(0.1).unwrap(), Annealer::constant(0.3, 20).unwrap());
@@ -178,7 +178,7 @@ impl OptimizerState {
     /// calls it before using anything.
     ///
     /// ```
-    /// use plateau_free::{Error, OptimizerState};
+    /// use plateau_free::{Error, run::OptimizerState};
     /// let mut state = OptimizerState::new(&[1.0, 2.0])?;
     /// state.theta[1] = f64::NAN;
     /// assert!(matches!(state.validate(), Err(Error::InvalidState { field: "theta", .. })));

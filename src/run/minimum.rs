@@ -23,7 +23,7 @@ pub enum Stop {
     /// The search converged (or stalled) and restarts are off ([`Minimizer::restarts`]).
     Converged,
     /// The best value stopped improving ([`Minimizer::stop_when_stalled`], the rule
-    /// [`crate::Stall`]).
+    /// [`crate::run::Stall`]).
     Stalled,
     /// The run is done before its budget: its restarts converged and keep finding the best
     /// point seen again, so more evaluations would buy nothing.
@@ -76,7 +76,7 @@ pub struct Minimum {
     /// Why the run ended.
     pub stop: Stop,
     /// Evaluations whose value was NaN or infinite (or, in the bindings, raised): ranked below
-    /// every finite value under [`crate::FailurePolicy::Continue`], never the best point.
+    /// every finite value under [`crate::run::FailurePolicy::Continue`], never the best point.
     #[cfg_attr(feature = "serde", serde(default))]
     pub failures: usize,
 }

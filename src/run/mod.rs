@@ -1,14 +1,15 @@
-//! The types a run takes and gives back, shared by the methods (`method/`) and the callback
-//! forms that drive them (`minimize.rs`, `optimize.rs`), in a module of their own so that
-//! neither side imports the other:
-//! - `options.rs`: a [`crate::Minimizer`]'s options ([`Strategy`], [`Metric`], the rest);
-//! - `minimum.rs`: its result ([`Minimum`], [`Stop`]) and its account (the evaluations
-//!   spent, the best point seen);
-//! - `history.rs`: what the paper's loop gives back and continues from ([`History`],
-//!   [`OptimizerState`], [`RunError`]);
-//! - `ask.rs`: the points of one ask ([`Ask`]) and the checks of told values;
-//! - `stall.rs`: the stop rule ([`Stall`]): a run ends when its best value stopped improving;
-//! - `grid.rs`: discrete coordinates (`crate::Minimizer::steps`): their checks and rounding.
+//! The types a run takes and gives back: a [`crate::Minimizer`]'s options ([`Strategy`],
+//! [`Metric`], [`FailurePolicy`], the stop rule [`Stall`]) and its result ([`Minimum`],
+//! [`Stop`]); the points of one ask ([`Ask`]); what the paper's loop gives back and
+//! continues from ([`History`], [`OptimizerState`], [`RunError`]) and what its observer sees
+//! ([`Step`]).
+
+// A module of its own, shared by the methods (`method/`) and the callback forms that drive
+// them (`minimize.rs`, `optimize.rs`), so that neither side imports the other. The files:
+// `options.rs` (the options), `minimum.rs` (the result and the account: the evaluations
+// spent, the best point seen), `history.rs` (the paper loop's record), `ask.rs` (the points
+// of one ask and the checks of told values), `stall.rs` (the stop rule), `grid.rs` (discrete
+// coordinates, `Minimizer::steps`: their checks and rounding), `step.rs` (the observer's view).
 
 mod ask;
 mod grid;
@@ -16,6 +17,7 @@ mod history;
 mod minimum;
 mod options;
 mod stall;
+mod step;
 
 pub(crate) use ask::count;
 pub use ask::Ask;
@@ -29,3 +31,4 @@ pub use options::{
 };
 pub(crate) use stall::check_fraction;
 pub use stall::{Stall, STALL_WINDOW};
+pub use step::Step;

@@ -30,7 +30,7 @@ use crate::{Minimizer, Optimizer};
 ///   and stopping would skip the annealing the schedule plans over the whole run).
 ///
 /// ```
-/// use plateau_free::Stall;
+/// use plateau_free::run::Stall;
 ///
 /// // Judged every 2 evaluations over a window of 6 evaluations.
 /// let mut rule = Stall::new(6, 0.0)?;

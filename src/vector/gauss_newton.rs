@@ -9,7 +9,7 @@ use crate::error::Error;
 use crate::objective::Points;
 use crate::run::{Ask, FailurePolicy};
 use crate::seeding::stream_seed;
-use crate::{Annealer, PAPER_SIGMA_MIN};
+use crate::{anneal::PAPER_SIGMA_MIN, Annealer};
 
 /// Options of the vector (least-squares) method: minimise `sum_i r_i(x)^2` for a black-box
 /// `r: R^n -> R^m`, from values of `r` alone, by damped Gauss-Newton steps on the
@@ -17,7 +17,7 @@ use crate::{Annealer, PAPER_SIGMA_MIN};
 ///
 /// Each iteration draws `pairs` antithetic perturbations `tau ~ N(0, sigma^2 I)` (2 `pairs`
 /// evaluations of `r`), estimates from them the smoothed Jacobian on the [`Sparsity`]
-/// pattern (Stein's identity, [`crate::smoothed_jacobian`]), averages it with the last
+/// pattern (Stein's identity, [`crate::vector::smoothed_jacobian`]), averages it with the last
 /// `memory - 1` estimates, solves `(J^T J + lambda diag(J^T J)) d = -J^T r` by conjugate
 /// gradients (`r`: the current point's residuals, or the smoothed ones, see
 /// [`LeastSquares::smoothed_residuals`]), limits each coordinate's move to `max_step`
@@ -31,7 +31,7 @@ use crate::{Annealer, PAPER_SIGMA_MIN};
 /// seed the run hands out (common random numbers within a pair and across step points).
 ///
 /// ```
-/// use plateau_free::{LeastSquares, Sparsity};
+/// use plateau_free::{LeastSquares, vector::Sparsity};
 /// // 1000 parameters, each seen by one output through a step function (a plateau).
 /// let n = 1000;
 /// let target: Vec<f64> = (0..n).map(|i| (i % 7) as f64 / 7.0).collect();
@@ -218,8 +218,8 @@ impl LeastSquares {
         self.validate(x0)?;
         let sigma_min = PAPER_SIGMA_MIN.min(self.sigma0);
         let annealer = Annealer::new(
-            crate::Schedule::WarmLinear {
-                warmup: crate::PAPER_WARMUP,
+            crate::anneal::Schedule::WarmLinear {
+                warmup: crate::anneal::PAPER_WARMUP,
             },
             self.sigma0,
             sigma_min,
@@ -254,7 +254,7 @@ impl LeastSquares {
     /// [`LeastSquares::run`] for a closure that returns its outputs.
     ///
     /// ```
-    /// use plateau_free::{LeastSquares, Sparsity};
+    /// use plateau_free::{LeastSquares, vector::Sparsity};
     /// let r = |x: &[f64]| vec![x[0] - 1.0, 2.0 * (x[1] + 0.5)];
     /// let options = LeastSquares::new(Sparsity::dense(2, 2)?).budget(200).sigma0(0.5);
     /// let best = options.run_vec(r, &[0.0, 0.0])?;
@@ -324,7 +324,7 @@ enum Phase {
 /// seed give the same bits.
 ///
 /// ```
-/// use plateau_free::{LeastSquares, Sparsity};
+/// use plateau_free::{LeastSquares, vector::Sparsity};
 /// let r = |x: &[f64]| vec![x[0] - 1.0, x[1] + 2.0];
 /// let options = LeastSquares::new(Sparsity::dense(2, 2)?).budget(100).seed(3);
 /// let mut run = options.ask_tell(&[0.0, 0.0])?;

@@ -147,7 +147,7 @@ pub(crate) fn check_outputs(
 /// the same).
 ///
 /// ```
-/// use plateau_free::{smoothed_jacobian, Sparsity};
+/// use plateau_free::{vector::smoothed_jacobian, vector::Sparsity};
 /// // r(x) = (2 x0, x0 - 3 x1): linear, so the smoothed Jacobian is the matrix itself.
 /// let r = |x: &[f64], _seed: u64, out: &mut [f64]| {
 ///     out[0] = 2.0 * x[0];

@@ -11,7 +11,7 @@ use crate::error::Error;
 /// as the dense pattern (every output on every parameter) without storing it.
 ///
 /// ```
-/// use plateau_free::Sparsity;
+/// use plateau_free::vector::Sparsity;
 /// // Output 0 on parameters 0 and 1, output 1 on parameter 1, output 2 on none.
 /// let s = Sparsity::from_pairs(3, 2, &[(0, 1), (0, 0), (1, 1), (0, 1)])?;
 /// assert_eq!(s.row(0), vec![0, 1]);
@@ -98,7 +98,7 @@ impl Sparsity {
     /// (cleared before each call): `outputs` calls, in order.
     ///
     /// ```
-    /// use plateau_free::Sparsity;
+    /// use plateau_free::vector::Sparsity;
     /// // A banded pattern: output i on parameters i - 1, i and i + 1.
     /// let s = Sparsity::from_fn(5, 5, |i, row| {
     ///     row.extend(i.saturating_sub(1)..(i + 2).min(5));

@@ -3,8 +3,8 @@
 //! paper loops' settings.
 
 use plateau_free::{
-    Adam, Annealer, Ask, AskTell, Minimizer, Minimum, OnFailure, Optimizer, PaperAskTell,
-    PlateauFreeGradient, Points, Sampling, Strategy,
+    estimator::OnFailure, objective::Points, run::Strategy, Adam, Annealer, Ask, AskTell,
+    Minimizer, Minimum, Optimizer, PaperAskTell, PlateauFreeGradient, Sampling,
 };
 
 pub fn rosen(x: &[f64]) -> f64 {
@@ -65,7 +65,10 @@ pub fn drive(mut run: AskTell, f: impl Fn(&[f64], u64) -> f64) -> Minimum {
 }
 
 /// Drives an ask-and-tell paper loop to its end.
-pub fn drive_paper(mut run: PaperAskTell, f: impl Fn(&[f64], u64) -> f64) -> plateau_free::History {
+pub fn drive_paper(
+    mut run: PaperAskTell,
+    f: impl Fn(&[f64], u64) -> f64,
+) -> plateau_free::run::History {
     while let Some(ask) = run.ask().unwrap() {
         let values = evaluate_elsewhere(ask, &f);
         run.tell(&values).unwrap();
@@ -89,7 +92,7 @@ pub fn show(tag: &str, m: &Minimum) -> String {
 }
 
 /// The line `PINNED` holds for a paper loop's history.
-pub fn show_history(tag: &str, h: &plateau_free::History) -> String {
+pub fn show_history(tag: &str, h: &plateau_free::run::History) -> String {
     let bits: Vec<u64> = h
         .theta
         .iter()

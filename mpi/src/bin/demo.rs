@@ -24,7 +24,8 @@ use mpi::point_to_point::{Destination, Source};
 use mpi::traits::Communicator;
 use plateau_free::seeding::mix;
 use plateau_free::{
-    Adam, Annealer, Minimizer, Objective, Optimizer, PlateauFreeGradient, Points, Seeded,
+    objective::Points, objective::Seeded, Adam, Annealer, Minimizer, Objective, Optimizer,
+    PlateauFreeGradient,
 };
 use plateau_free_mpi::Wait;
 

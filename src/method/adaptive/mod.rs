@@ -1,7 +1,7 @@
 //! The adaptive search, written once, as a state machine between asks: runs of a Gaussian
 //! search distribution (`gaussian/`: its draws and its update) from the start or the best
 //! point seen, each restart with twice the population, until the budget is spent, the
-//! target reached, or (without restarts) a run converges. [`crate::Strategy::Adaptive`] of
+//! target reached, or (without restarts) a run converges. [`crate::run::Strategy::Adaptive`] of
 //! [`crate::AskTell`], and the polish after the paper's loop (`../polished.rs`).
 
 mod gaussian;

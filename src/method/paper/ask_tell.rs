@@ -161,7 +161,7 @@ impl PaperAskTell {
     /// The points of the next gradient estimate (`N` rows of theta's dimension) and their
     /// seeds (both members of an antithetic pair share one), or `None` once every iteration
     /// is done. After a [`PaperAskTell::tell`] whose values called for a redraw
-    /// ([`crate::OnFailure::Resample`]), the same iteration's redrawn points.
+    /// ([`crate::estimator::OnFailure::Resample`]), the same iteration's redrawn points.
     ///
     /// # Errors
     /// [`Error::AskPending`] if the last asked points still wait for their values; a
@@ -198,7 +198,7 @@ impl PaperAskTell {
 
     /// Tells the values of the asked points, in their order: finishes the estimate and
     /// takes the Adam step (or, when a value is not finite and the estimator redraws,
-    /// [`crate::OnFailure::Resample`], readies the redraw for the next ask).
+    /// [`crate::estimator::OnFailure::Resample`], readies the redraw for the next ask).
     ///
     /// # Errors
     /// [`Error::NothingAsked`] without an ask waiting for values; [`Error::TellCount`] for
@@ -265,7 +265,7 @@ impl PaperAskTell {
         }
     }
 
-    /// The record of the completed iterations (with [`crate::HistoryKeep::Last`]`(k)`, of
+    /// The record of the completed iterations (with [`crate::run::HistoryKeep::Last`]`(k)`, of
     /// the last `k` to `2 k` of them while the run is in progress; [`PaperAskTell::finish`]
     /// and [`PaperAskTell::state`] keep exactly `k`).
     pub fn history(&self) -> &History {
@@ -273,7 +273,7 @@ impl PaperAskTell {
     }
 
     /// The gradient estimate of the last completed iteration (what the callback form's
-    /// observer sees in [`crate::Step::estimate`]).
+    /// observer sees in [`crate::run::Step::estimate`]).
     pub fn last_estimate(&self) -> Option<&Estimate> {
         self.last.as_ref()
     }

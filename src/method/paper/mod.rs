@@ -72,7 +72,7 @@ impl Optimizer {
 
     /// Ends the loop when the mean value of its estimates has not improved over the last
     /// `window` of its evaluations (a fraction in `(0, 1]` of iterations x evaluations per
-    /// estimate; [`crate::STALL_WINDOW`] is the tested choice): the rule [`Stall`] fed each
+    /// estimate; [`crate::run::STALL_WINDOW`] is the tested choice): the rule [`Stall`] fed each
     /// estimate's mean value. Default: off. It judges only the iterations past the annealing
     /// schedule ([`Optimizer::iterations`] beyond [`Annealer::iterations`]): within the
     /// schedule the loss falls because the spread is annealed, and an early stop would skip

@@ -1,4 +1,4 @@
-//! `stopping`: the stop rule (`--stop-when-stalled`, `plateau_free::Stall`) replayed on every
+//! `stopping`: the stop rule (`--stop-when-stalled`, `plateau_free::run::Stall`) replayed on every
 //! finished full-length run of some seeds studies, without rendering
 //! ([`crate::run::replay_stall`]): per task and study, the renders at the stop against the
 //! budget and the parameter MSE at the stop against at the end, for several windows.
@@ -46,7 +46,7 @@ pub(super) fn run(args: Args) -> Result<()> {
         let _ = writeln!(
             md,
             "\n## Window {window} of the budget{}\n",
-            if window == plateau_free::STALL_WINDOW {
+            if window == plateau_free::run::STALL_WINDOW {
                 " (the library's `STALL_WINDOW`)"
             } else {
                 ""
@@ -100,7 +100,7 @@ pub(super) fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-const INTRO: &str = "The rule (`plateau_free::Stall`, `Minimizer::stop_when_stalled`, `pathtracer optimize --stop-when-stalled FRACTION`): a run ends when the best value it has seen did not improve at all over the last `window` of its budget (evaluations). It sees only the values (never the true parameters); the budget stays the ceiling. It judges the adaptive search from its first generation and the polish from the hand-over; the paper's loop is not judged within its annealing schedule, which spans the loop's share of the budget (the loss falls there because the spread is annealed; stopping would skip the annealing), so the paper loop's runs are listed with no stop.\n\nEach finished full-length run is replayed without rendering: its checkpoint holds every value in order, cut into the iterations' batches by its history's renders, and the library's own `Stall` is fed each batch's smallest value as the `Minimizer` feeds it (`run::replay_stall`; the test `stop_rule_run_stops_where_the_replay_says` checks that a run made with the rule stops at the very iteration the replay names, bit for bit). Parameter MSE is of the best point so far, as the runs report it. \"Worse\": the parameter MSE at the stop is above the end's (by any amount; the factor is listed); \"lost the paper's MSE\": at or below the paper's at the end, above it at the stop. Left out: unfinished runs, runs without a checkpoint (`docs/results/seeds-adaptive`), and runs whose history has no renders (written before the runs counted, such as `docs/results/seeds-polished`); the command prints why for each.\n";
+const INTRO: &str = "The rule (`plateau_free::run::Stall`, `Minimizer::stop_when_stalled`, `pathtracer optimize --stop-when-stalled FRACTION`): a run ends when the best value it has seen did not improve at all over the last `window` of its budget (evaluations). It sees only the values (never the true parameters); the budget stays the ceiling. It judges the adaptive search from its first generation and the polish from the hand-over; the paper's loop is not judged within its annealing schedule, which spans the loop's share of the budget (the loss falls there because the spread is annealed; stopping would skip the annealing), so the paper loop's runs are listed with no stop.\n\nEach finished full-length run is replayed without rendering: its checkpoint holds every value in order, cut into the iterations' batches by its history's renders, and the library's own `Stall` is fed each batch's smallest value as the `Minimizer` feeds it (`run::replay_stall`; the test `stop_rule_run_stops_where_the_replay_says` checks that a run made with the rule stops at the very iteration the replay names, bit for bit). Parameter MSE is of the best point so far, as the runs report it. \"Worse\": the parameter MSE at the stop is above the end's (by any amount; the factor is listed); \"lost the paper's MSE\": at or below the paper's at the end, above it at the stop. Left out: unfinished runs, runs without a checkpoint (`docs/results/seeds-adaptive`), and runs whose history has no renders (written before the runs counted, such as `docs/results/seeds-polished`); the command prints why for each.\n";
 
 /// The replays of every finished run of `task` in `dir` (seeds 0, 1, ...).
 fn replays(dir: &std::path::Path, task: &str, window: f64) -> Vec<Replayed> {

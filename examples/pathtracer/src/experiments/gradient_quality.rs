@@ -1,7 +1,7 @@
 //! Relative error of one gradient estimate against N and spp on SHADOW, at the start and near
 //! the optimum, at fixed renderer seed.
 
-use plateau_free::{PlateauFreeGradient, Seeded};
+use plateau_free::{objective::Seeded, PlateauFreeGradient};
 
 use super::{task, write_page, Options};
 use crate::report::{self, Result};

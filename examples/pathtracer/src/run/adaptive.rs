@@ -12,7 +12,7 @@
 //! also keeps every value told, in order, for the stop rule's study
 //! ([`super::replay_stall`]).
 
-use plateau_free::{AskTell, Minimizer, Strategy};
+use plateau_free::{run::Strategy, AskTell, Minimizer};
 
 use super::{Method, Settings};
 use crate::report::Result;
@@ -20,7 +20,7 @@ use crate::tasks::Task;
 
 /// The first row of the polish in a polished run of `budget` evaluations with `samples` per
 /// estimate and the share `polish` for the polish: the loop's iterations (on its share of the
-/// budget, the start and its final evaluation apart, as `plateau_free::Strategy::Paper`
+/// budget, the start and its final evaluation apart, as `plateau_free::run::Strategy::Paper`
 /// counts them), then the final evaluation's row.
 pub(super) fn polish_starts_at(budget: usize, samples: usize, polish: f64) -> usize {
     let loop_budget = budget - (budget as f64 * polish).floor() as usize;

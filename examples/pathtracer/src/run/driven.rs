@@ -9,7 +9,7 @@ use std::cell::Cell;
 use std::time::{Duration, Instant};
 
 use plateau_free::lifecycle::AskAndTell;
-use plateau_free::{Ask, Error, History};
+use plateau_free::{run::History, Ask, Error};
 
 use super::checkpoint::{executable, Checkpoint, Progress};
 use super::{Ended, Row, Settings};

@@ -13,7 +13,7 @@
 
 use std::time::Instant;
 
-use plateau_free::{Ask, LeastSquares, LeastSquaresAskTell};
+use plateau_free::{vector::LeastSquaresAskTell, Ask, LeastSquares};
 
 use super::driven::Ctx;
 use super::{Crn, Settings};

@@ -12,7 +12,7 @@
 //! - The image method: a row per ask told (a Jacobian's pairs or a step's point), with the
 //!   current point's image MSE (no render is spent on evaluation alone).
 
-use plateau_free::Points;
+use plateau_free::objective::Points;
 
 use super::checkpoint::Progress;
 use super::driven::{Ctx, Tracked};

@@ -106,7 +106,7 @@ pub struct Settings {
     pub eval_every: usize,
     /// Stop when the optimisation (renders for the gradient included) has used this much time.
     pub budget_seconds: Option<f64>,
-    /// The stop rule (`plateau_free::Stall`): end the run when the best value has not
+    /// The stop rule (`plateau_free::run::Stall`): end the run when the best value has not
     /// improved over this fraction of the N x iterations evaluations (`None`: the budget
     /// alone ends it). Runs written before the rule read as `None`.
     #[serde(default)]

@@ -1,4 +1,4 @@
-//! The stop rule (`plateau_free::Stall`, `--stop-when-stalled`) replayed offline on a
+//! The stop rule (`plateau_free::run::Stall`, `--stop-when-stalled`) replayed offline on a
 //! finished full-length run, without rendering: where the run would have stopped, and its
 //! parameter error there against at its end.
 //!
@@ -12,7 +12,7 @@
 
 use std::path::Path;
 
-use plateau_free::Stall;
+use plateau_free::run::Stall;
 
 use super::{adaptive, Checkpoint, Method, Progress, Row};
 use crate::report::Result;

@@ -65,7 +65,7 @@ pub trait Scenario: Send + Sync {
     /// Which parameters each value of the image (pixel and channel, in [`Image::data`]'s
     /// order) can depend on, derived from the scene seen by `camera`; `None`: any pixel on
     /// any parameter (the default).
-    fn footprint(&self, _camera: Camera) -> Option<plateau_free::Sparsity> {
+    fn footprint(&self, _camera: Camera) -> Option<plateau_free::vector::Sparsity> {
         None
     }
     /// The parameters that are angles of period 1 (the scene at `theta[i] + 1` is the scene
@@ -335,11 +335,14 @@ impl Task {
     ///
     /// # Errors
     /// A pattern the library refuses (an empty image).
-    pub fn footprint(&self, view: View) -> Result<plateau_free::Sparsity, plateau_free::Error> {
+    pub fn footprint(
+        &self,
+        view: View,
+    ) -> Result<plateau_free::vector::Sparsity, plateau_free::Error> {
         let camera = self.camera.camera(view);
         match self.scenario.footprint(camera) {
             Some(pattern) => Ok(pattern),
-            None => plateau_free::Sparsity::dense(
+            None => plateau_free::vector::Sparsity::dense(
                 3 * camera.width as usize * camera.height as usize,
                 self.dim(),
             ),

@@ -52,7 +52,7 @@ impl Scenario for TextureTask {
     /// bilinear lookup can reach from the UV rectangle they span (the rectangle, widened to
     /// the lookup's neighbours). A pixel that misses the quad depends on nothing. Derived
     /// from the scene, so a changed camera or resolution changes the pattern with it.
-    fn footprint(&self, camera: Camera) -> Option<plateau_free::Sparsity> {
+    fn footprint(&self, camera: Camera) -> Option<plateau_free::vector::Sparsity> {
         let scene = self.scene(&[], camera);
         let (w, h) = (camera.width as usize, camera.height as usize);
         let side = SIDE as f32;
@@ -63,7 +63,7 @@ impl Scenario for TextureTask {
             let last = ((hi * side - 0.5).floor() + 1.0).clamp(0.0, side - 1.0) as usize;
             first..=last
         };
-        let pattern = plateau_free::Sparsity::from_fn(3 * w * h, DIM, |value, row| {
+        let pattern = plateau_free::vector::Sparsity::from_fn(3 * w * h, DIM, |value, row| {
             let (pixel, channel) = (value / 3, value % 3);
             let (x, y) = ((pixel % w) as u32, (pixel / w) as u32);
             let mut uv = Vec::with_capacity(4);

@@ -1,4 +1,4 @@
-//! The limited-memory part of the low-rank-plus-diagonal metric ([`crate::Metric::LowRank`]):
+//! The limited-memory part of the low-rank-plus-diagonal metric ([`crate::run::Metric::LowRank`]):
 //! `m` direction vectors that stretch the draws along the search's recent progress, in
 //! `O(m n)` memory and time per sample.
 //!

@@ -317,7 +317,7 @@ impl SearchGaussian {
         }
     }
 
-    /// The same run with the low-rank-plus-diagonal metric ([`crate::Metric::LowRank`]): the
+    /// The same run with the low-rank-plus-diagonal metric ([`crate::run::Metric::LowRank`]): the
     /// diagonal one and LM-MA-ES's directions (`lowrank.rs`). A full metric stays full.
     pub fn with_low_rank(mut self) -> SearchGaussian {
         if self.full.is_none() {

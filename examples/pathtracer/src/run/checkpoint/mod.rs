@@ -30,7 +30,7 @@ pub use error::CheckpointError;
 use std::path::Path;
 
 use plateau_free::baseline::BaselineAskTell;
-use plateau_free::{AskTell, LeastSquaresAskTell, PaperAskTell};
+use plateau_free::{vector::LeastSquaresAskTell, AskTell, PaperAskTell};
 use serde::{Deserialize, Serialize};
 
 use super::{Row, Settings};
