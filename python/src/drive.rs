@@ -1,11 +1,13 @@
-//! `_drive`: a `plateau_free.minimize` run (adaptive, polished, the paper's loop) driven by
-//! the library's [`Driver`], so that the run's lifecycle (interrupt, progress line, history,
-//! checkpoint) is the library's, written once.
+//! `_drive`: a `plateau_free.minimize` run (adaptive, polished, the paper's loop) or a
+//! `plateau_free.least_squares` run driven by the library's [`Driver`], so that the run's
+//! lifecycle (interrupt, progress line, history, checkpoint) is the library's, written once.
+//! [`Driven`] holds either run through [`DrivenRun`].
 //!
 //! Python keeps what is Python's: the evaluator (`evaluate(points, seeds) -> values`: `args`,
 //! workers and executors, exceptions counted as failures, `on_failure='raise'`), the callback's
-//! arguments and the result's fields. The run is a copy of the `_AskTell`'s, put back at the
-//! end (also when the run fails), so the result is read from the `_AskTell` as before.
+//! arguments and the result's fields. The run is a copy of the `_AskTell`'s (or the
+//! `_LeastSquares`'), put back at the end (also when the run fails), so the result is read
+//! from that object as before.
 
 use std::collections::HashSet;
 use std::io::Write;
@@ -16,7 +18,141 @@ use crate::ask_tell::{best_of, copy_of, last_step_of, Run};
 use plateau_free::lifecycle::{
     AskAndTell, Checkpoint, Driver, Interrupt, ProgressLine, Trace, TraceRow,
 };
-use plateau_free::Ask;
+use plateau_free::{Ask, LeastSquaresAskTell};
+
+/// A run that [`Driven`] drives for Python: the `_AskTell`'s [`Run`] or a
+/// [`LeastSquaresAskTell`]. What the library's [`AskAndTell`] says, plus what Python needs:
+/// the callback's argument, a bit-exact copy, the serde state and the end test.
+pub(crate) trait DrivenRun: Sized + serde::Serialize {
+    /// The next points and their seeds; None once the run has ended.
+    fn ask_points(&mut self) -> Result<Option<Ask<'_>>, Error>;
+    /// The asked points' values, [`DrivenRun::values_per_point`] a point.
+    fn tell_values(&mut self, values: &[f64]) -> Result<(), Error>;
+    /// Values per point: 1, or a least-squares run's outputs.
+    fn values_per_point(&self) -> usize;
+    fn evaluations(&self) -> usize;
+    fn budget(&self) -> Option<usize>;
+    fn iteration(&self) -> usize;
+    fn sigma(&self) -> f64;
+    fn best_value(&self) -> f64;
+    /// The library's settings of the run, for a checkpoint's identity.
+    fn identity(&self) -> Vec<(&'static str, String)>;
+    fn is_done(&self) -> bool;
+    /// A bit-exact copy (the run so far, for a run that ends early).
+    fn copy(&self) -> Self;
+    /// Replaces the run with the state a checkpoint kept, checked; unchanged on error.
+    fn restore_state(&mut self, state: serde_json::Value) -> Result<(), Error>;
+    /// The callback's third argument after an iteration (see [`Driven::after_iteration`]).
+    fn info(&self, py: Python<'_>, shape: &[usize]) -> PyResult<Py<PyAny>>;
+    /// The library's error that ended the run, for Python.
+    fn python_error(&self, error: Error) -> PyErr {
+        value_error(error)
+    }
+}
+
+impl DrivenRun for Run {
+    fn ask_points(&mut self) -> Result<Option<Ask<'_>>, Error> {
+        Run::ask_points(self)
+    }
+    fn tell_values(&mut self, values: &[f64]) -> Result<(), Error> {
+        Run::tell_values(self, values)
+    }
+    fn values_per_point(&self) -> usize {
+        1
+    }
+    fn evaluations(&self) -> usize {
+        Run::evaluations(self)
+    }
+    fn budget(&self) -> Option<usize> {
+        Run::budget(self)
+    }
+    fn iteration(&self) -> usize {
+        Run::iteration(self)
+    }
+    fn sigma(&self) -> f64 {
+        Run::sigma(self)
+    }
+    fn best_value(&self) -> f64 {
+        Run::best_value(self)
+    }
+    fn identity(&self) -> Vec<(&'static str, String)> {
+        Run::identity(self)
+    }
+    fn is_done(&self) -> bool {
+        Run::is_done(self)
+    }
+    fn copy(&self) -> Self {
+        // The run's own serde state read back: it holds only numbers, so this cannot fail.
+        copy_of(self).expect("a run's serde state reads back")
+    }
+    fn restore_state(&mut self, state: serde_json::Value) -> Result<(), Error> {
+        *self = serde_json::from_value(state)
+            .map_err(|e| state_error(format!("damaged state: {e}")))?;
+        Ok(())
+    }
+    /// The adaptive search's best `(x, fun)` (None before any value), or the paper loop's
+    /// last step.
+    fn info(&self, py: Python<'_>, shape: &[usize]) -> PyResult<Py<PyAny>> {
+        Ok(match self {
+            Run::Adaptive(_) => best_of(py, self, shape)?.into_pyobject(py)?.unbind(),
+            Run::Paper(_) => last_step_of(py, self, shape)?.into_pyobject(py)?.unbind(),
+        })
+    }
+    fn python_error(&self, error: Error) -> PyErr {
+        match (self, error) {
+            (Run::Paper(p), error @ Error::NonFiniteValue { .. }) if p.final_asked => {
+                PyValueError::new_err(format!("{error}: the final evaluation must be finite"))
+            }
+            (_, error) => value_error(error),
+        }
+    }
+}
+
+impl DrivenRun for LeastSquaresAskTell {
+    fn ask_points(&mut self) -> Result<Option<Ask<'_>>, Error> {
+        AskAndTell::ask(self)
+    }
+    fn tell_values(&mut self, values: &[f64]) -> Result<(), Error> {
+        AskAndTell::tell(self, values)
+    }
+    fn values_per_point(&self) -> usize {
+        AskAndTell::values_per_point(self)
+    }
+    fn evaluations(&self) -> usize {
+        AskAndTell::evaluations(self)
+    }
+    fn budget(&self) -> Option<usize> {
+        AskAndTell::budget(self)
+    }
+    fn iteration(&self) -> usize {
+        AskAndTell::iteration(self)
+    }
+    fn sigma(&self) -> f64 {
+        AskAndTell::sigma(self)
+    }
+    fn best_value(&self) -> f64 {
+        AskAndTell::best_value(self)
+    }
+    fn identity(&self) -> Vec<(&'static str, String)> {
+        AskAndTell::identity(self)
+    }
+    fn is_done(&self) -> bool {
+        self.finish().is_ok()
+    }
+    fn copy(&self) -> Self {
+        self.clone()
+    }
+    /// Through the library's restore, which checks the vectors against the pattern.
+    fn restore_state(&mut self, state: serde_json::Value) -> Result<(), Error> {
+        let bytes = serde_json::to_vec(&state).map_err(state_error)?;
+        AskAndTell::restore(self, &bytes)
+    }
+    /// The current point and its sum of squares, `(x, fun)`.
+    fn info(&self, py: Python<'_>, _shape: &[usize]) -> PyResult<Py<PyAny>> {
+        let x = self.theta().to_vec().into_pyarray(py);
+        Ok((x, self.fun()).into_pyobject(py)?.into_any().unbind())
+    }
+}
 
 /// What a driven run tells Python besides its end.
 #[derive(Default)]
@@ -29,11 +165,11 @@ struct Side {
     restored: Option<(usize, bool)>,
 }
 
-/// The run as the driver holds it: the `_AskTell`'s run with its history and the evaluator's
-/// failure counts (saved with it), the Python settings a checkpoint must match, and the
-/// callback.
-struct Driven {
-    run: Run,
+/// The run as the driver holds it: the `_AskTell`'s or `_LeastSquares`' run with its history
+/// and the evaluator's failure counts (saved with it), the Python settings a checkpoint must
+/// match, and the callback.
+struct Driven<R> {
+    run: R,
     shape: Vec<usize>,
     trace: Trace,
     settings: Vec<(&'static str, String)>,
@@ -53,20 +189,20 @@ struct Counts {
 
 /// A checkpoint's state: the run, its history, the counts.
 #[derive(serde::Serialize)]
-struct SavedView<'a> {
-    run: &'a Run,
+struct SavedView<'a, R> {
+    run: &'a R,
     trace: &'a Trace,
     counts: Counts,
 }
 
 #[derive(serde::Deserialize)]
 struct Saved {
-    run: Run,
+    run: serde_json::Value,
     trace: Trace,
     counts: Counts,
 }
 
-impl Driven {
+impl<R: DrivenRun> Driven<R> {
     fn side(&self) -> std::sync::MutexGuard<'_, Side> {
         self.side.lock().unwrap_or_else(|p| p.into_inner())
     }
@@ -82,8 +218,9 @@ impl Driven {
     }
 
     /// After an iteration: a pending Ctrl-C, then the callback (`after(nit, nfev, info)`,
-    /// `info` the adaptive search's best `(x, fun)` or the paper loop's last step); a truthy
-    /// return or an exception ends the run.
+    /// `info` the adaptive search's best `(x, fun)`, the paper loop's last step, or the
+    /// least-squares run's current `(x, fun)`); a truthy return or an exception ends the
+    /// run.
     fn after_iteration(&self, py: Python<'_>, iteration: usize) {
         if py.check_signals().is_err() {
             return self.stop("interrupted", None);
@@ -91,13 +228,7 @@ impl Driven {
         let Some(after) = &self.after else {
             return;
         };
-        let info = match &self.run {
-            Run::Adaptive(_) => best_of(py, &self.run, &self.shape)
-                .and_then(|b| b.into_pyobject(py).map(|o| o.into_any().unbind())),
-            Run::Paper(_) => last_step_of(py, &self.run, &self.shape)
-                .and_then(|s| s.into_pyobject(py).map(|o| o.into_any().unbind())),
-        };
-        let called = info.and_then(|info| {
+        let called = self.run.info(py, &self.shape).and_then(|info| {
             after
                 .call1(py, (iteration, self.run.evaluations(), info))
                 .and_then(|r| r.bind(py).is_truthy())
@@ -135,13 +266,13 @@ fn state_error(reason: impl std::fmt::Display) -> Error {
 }
 
 /// A driven run's end: the run and its history.
-struct Ended {
-    run: Run,
+struct Ended<R> {
+    run: R,
     trace: Trace,
 }
 
-impl AskAndTell for Driven {
-    type Output = Ended;
+impl<R: DrivenRun> AskAndTell for Driven<R> {
+    type Output = Ended<R>;
 
     fn ask(&mut self) -> Result<Option<Ask<'_>>, Error> {
         self.run.ask_points()
@@ -163,6 +294,10 @@ impl AskAndTell for Driven {
             self.stop("interrupted", None);
         }
         Ok(())
+    }
+
+    fn values_per_point(&self) -> usize {
+        self.run.values_per_point()
     }
 
     fn evaluations(&self) -> usize {
@@ -189,18 +324,16 @@ impl AskAndTell for Driven {
         Python::attach(|py| self.counts(py).map_or(0, |c| c.failures))
     }
 
-    fn finish(self) -> Result<Ended, Error> {
+    fn finish(self) -> Result<Ended<R>, Error> {
         Ok(Ended {
             run: self.run,
             trace: self.trace,
         })
     }
 
-    fn so_far(&self) -> Ended {
+    fn so_far(&self) -> Ended<R> {
         Ended {
-            // The run's own serde state read back: it holds only numbers, so this cannot
-            // fail.
-            run: copy_of(&self.run).expect("a run's serde state reads back"),
+            run: self.run.copy(),
             trace: self.trace.clone(),
         }
     }
@@ -230,8 +363,8 @@ impl AskAndTell for Driven {
     fn restore(&mut self, bytes: &[u8]) -> Result<(), Error> {
         let saved: Saved = serde_json::from_slice(bytes)
             .map_err(|e| state_error(format!("damaged state: {e}")))?;
+        self.run.restore_state(saved.run)?;
         Python::attach(|py| self.set_counts(py, &saved.counts)).map_err(state_error)?;
-        self.run = saved.run;
         self.trace = saved.trace;
         self.side().restored = Some((self.run.iteration(), self.run.is_done()));
         Ok(())
@@ -325,8 +458,107 @@ fn evaluate_ask(
     Ok(())
 }
 
-/// Runs `run` (an `_AskTell`) to its end with the library's driver, `evaluate` (an
-/// `_Evaluator`: callable on `(points, seeds)`, with the attributes `failures`,
+/// How a run is driven: `_drive`'s keywords.
+struct Setup {
+    disp: bool,
+    keep: usize,
+    checkpoint: Option<std::path::PathBuf>,
+    checkpoint_every: Option<usize>,
+    settings: Vec<(String, String)>,
+    after: Option<Py<PyAny>>,
+}
+
+/// A driven run's end: the run, put back into its Python object, and the end's dict (or the
+/// error, the run so far put back).
+struct Outcome<R> {
+    run: Option<R>,
+    ended: PyResult<Py<PyDict>>,
+}
+
+/// Runs `run` (shaped `shape` for Python) to its end as `setup` says, with `evaluate` giving
+/// the values.
+fn drive_run<R: DrivenRun>(
+    py: Python<'_>,
+    run: R,
+    shape: Vec<usize>,
+    evaluate: &Bound<'_, PyAny>,
+    setup: Setup,
+) -> Outcome<R> {
+    let interrupt = Interrupt::new();
+    let side = Arc::new(Mutex::new(Side::default()));
+    let driven = Driven {
+        run,
+        shape: shape.clone(),
+        trace: Trace::new(setup.keep),
+        settings: setup
+            .settings
+            .iter()
+            .map(|(n, v)| (interned(n), v.clone()))
+            .collect(),
+        evaluator: evaluate.clone().unbind(),
+        after: setup.after,
+        interrupt: interrupt.clone(),
+        side: side.clone(),
+    };
+    let mut driver = Driver::new().interrupt(interrupt);
+    if setup.disp {
+        driver = driver.observe(ProgressLine::new(Stdout));
+    }
+    if let Some(path) = setup.checkpoint {
+        let saved = Checkpoint::new(path);
+        driver = driver.checkpoint(match setup.checkpoint_every {
+            Some(k) => saved.every_iterations(k),
+            None => saved,
+        });
+    }
+    let ended = driver.run(driven, |_, ask, out| {
+        evaluate_ask(py, evaluate, &shape, ask, out)
+    });
+    let mut side = std::mem::take(&mut *side.lock().unwrap_or_else(|p| p.into_inner()));
+    match ended {
+        Ok(end) => Outcome {
+            run: Some(end.run),
+            ended: match side.raised.take() {
+                Some(error) => Err(error),
+                None => end_dict(py, &side, &end.trace),
+            },
+        },
+        Err(failure) => {
+            let run = failure.result.map(|end| end.run);
+            let error = match failure.error {
+                DriveError::Python(error) => error,
+                DriveError::Library(error) => match &run {
+                    Some(run) => run.python_error(error),
+                    None => value_error(error),
+                },
+            };
+            Outcome {
+                run,
+                ended: Err(error),
+            }
+        }
+    }
+}
+
+/// The end of a run that finished or was stopped: `why`, `restored`, `rows`, `dropped` (see
+/// [`_drive`]).
+fn end_dict(py: Python<'_>, side: &Side, trace: &Trace) -> PyResult<Py<PyDict>> {
+    let rows: Vec<(usize, f64, f64)> = trace
+        .rows()
+        .iter()
+        .map(|r| (r.evaluations, r.best, r.sigma))
+        .collect();
+    let out = PyDict::new(py);
+    out.set_item("why", side.why)?;
+    out.set_item("restored", side.restored)?;
+    out.set_item("dropped", trace.iterations_seen() - rows.len())?;
+    out.set_item("rows", rows)?;
+    Ok(out.unbind())
+}
+
+/// Runs `run` (an `_AskTell` or a `_LeastSquares`) to its end with the library's driver,
+/// `evaluate` (an `_Evaluator`: callable on `(points, seeds)`, giving a value per point, or
+/// a least-squares run's outputs per point, flat; with the attributes `failures`,
 /// `exceptions` and `first_error_text` that a checkpoint keeps) giving the values. The
 /// run's end is put back into `run`. Returns a dict: `why` (None for a run that ended by
 /// itself, else `"interrupted"`, `"callback"`), `restored` (None, or `(iteration,
@@ -347,7 +579,7 @@ fn evaluate_ask(
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn _drive<'py>(
     py: Python<'py>,
-    run: PyRef<'py, PyAskTell>,
+    run: Bound<'py, PyAny>,
     evaluate: Bound<'py, PyAny>,
     disp: bool,
     keep: usize,
@@ -356,69 +588,31 @@ pub(crate) fn _drive<'py>(
     settings: Vec<(String, String)>,
     after: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (held, shape) = run.copy_run(py)?;
-    let interrupt = Interrupt::new();
-    let side = Arc::new(Mutex::new(Side::default()));
-    let driven = Driven {
-        run: held,
-        shape: shape.clone(),
-        trace: Trace::new(keep),
-        settings: settings
-            .iter()
-            .map(|(n, v)| (interned(n), v.clone()))
-            .collect(),
-        evaluator: evaluate.clone().unbind(),
+    let setup = Setup {
+        disp,
+        keep,
+        checkpoint,
+        checkpoint_every,
+        settings,
         after,
-        interrupt: interrupt.clone(),
-        side: side.clone(),
     };
-    let mut driver = Driver::new().interrupt(interrupt);
-    if disp {
-        driver = driver.observe(ProgressLine::new(Stdout));
-    }
-    if let Some(path) = checkpoint {
-        let saved = Checkpoint::new(path);
-        driver = driver.checkpoint(match checkpoint_every {
-            Some(k) => saved.every_iterations(k),
-            None => saved,
-        });
-    }
-    let ended = driver.run(driven, |_, ask, out| {
-        evaluate_ask(py, &evaluate, &shape, ask, out)
-    });
-    let mut side = std::mem::take(&mut *side.lock().unwrap_or_else(|p| p.into_inner()));
-    let trace = match ended {
-        Ok(end) => {
-            run.put_run(py, end.run)?;
-            end.trace
+    let ended = if let Ok(ask_tell) = run.cast::<PyAskTell>() {
+        let ask_tell = ask_tell.borrow();
+        let (held, shape) = ask_tell.copy_run(py)?;
+        let outcome = drive_run(py, held, shape, &evaluate, setup);
+        if let Some(end) = outcome.run {
+            ask_tell.put_run(py, end)?;
         }
-        Err(failure) => {
-            let mut final_asked = false;
-            if let Some(end) = failure.result {
-                final_asked = matches!(&end.run, Run::Paper(p) if p.final_asked);
-                run.put_run(py, end.run)?;
-            }
-            return Err(match failure.error {
-                DriveError::Python(error) => error,
-                DriveError::Library(error @ Error::NonFiniteValue { .. }) if final_asked => {
-                    PyValueError::new_err(format!("{error}: the final evaluation must be finite"))
-                }
-                DriveError::Library(error) => value_error(error),
-            });
+        outcome.ended
+    } else {
+        let vector = run.cast::<PyLeastSquares>()?.borrow();
+        let held = vector.copy_run(py)?;
+        let shape = vec![held.theta().len()];
+        let outcome = drive_run(py, held, shape, &evaluate, setup);
+        if let Some(end) = outcome.run {
+            vector.put_run(py, end)?;
         }
+        outcome.ended
     };
-    if let Some(error) = side.raised.take() {
-        return Err(error);
-    }
-    let rows: Vec<(usize, f64, f64)> = trace
-        .rows()
-        .iter()
-        .map(|r| (r.evaluations, r.best, r.sigma))
-        .collect();
-    let out = PyDict::new(py);
-    out.set_item("why", side.why)?;
-    out.set_item("restored", side.restored)?;
-    out.set_item("dropped", trace.iterations_seen() - rows.len())?;
-    out.set_item("rows", rows)?;
-    Ok(out)
+    ended.map(|dict| dict.into_bound(py))
 }
