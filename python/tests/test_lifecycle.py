@@ -382,7 +382,7 @@ def residuals(x: np.ndarray) -> np.ndarray:
     return np.concatenate([10.0 * (x[1:] - x[:-1] ** 2), 1.0 - x[:-1]])
 
 
-LS = dict(budget=1500, sigma0=0.3, seed=3)
+LS: dict[str, Any] = dict(budget=1500, sigma0=0.3, seed=3)
 LS_X0 = [-0.5, 0.5, 0.0, 0.3]
 
 
