@@ -24,7 +24,8 @@ The main entry points:
   ``es = ask_tell(x0)``, then ``X, seeds = es.ask()`` and ``es.tell(values)``
   until ``es.done``; ``es.result`` is :func:`minimize`'s result.
 - :func:`least_squares` -- for a ``fun`` that returns an array (a residual image): the
-  Gaussian-smoothed Jacobian on a sparsity pattern and damped Gauss-Newton steps.
+  Gaussian-smoothed Jacobian on a sparsity pattern and damped Gauss-Newton steps, on
+  :func:`minimize`'s run (failures, Ctrl-C, callback, progress, history, checkpoint, workers).
 - :class:`FiniteDifference`, :class:`Spsa` -- the baselines (also in ``plateau_free.baseline``).
 - :func:`plot_history` -- a run's history as a figure (matplotlib, the ``[plot]`` extra).
 - :class:`OptionTypeError` -- an option of the wrong type: a ValueError (as every bad option)

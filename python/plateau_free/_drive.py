@@ -1,5 +1,5 @@
 """The run of :func:`minimize` for the methods with an ask-and-tell form (``'adaptive'``,
-``'polished'``, ``'plateau'``): the library's driver (``_native._drive``: interrupt, progress
+``'polished'``, ``'plateau'``), and of :func:`least_squares`: the library's driver (``_native._drive``: interrupt, progress
 line, history, checkpoint) runs it, with ``fun`` evaluated here
 (:class:`~plateau_free._evaluate._Evaluator`); this module turns its end into the result.
 Ctrl-C ends the run with its best point so far; an exception that ends it carries the result

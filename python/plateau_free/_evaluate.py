@@ -1,7 +1,8 @@
 """Evaluating ``fun`` on the points a run asks for: in this thread, on threads, on an executor or
 through a map-like callable, in the order of the points (so that the run is bit for bit the run
 of one worker); a NaN, an infinity or an exception is a failure, counted, and under
-``on_failure='raise'`` the end of the run."""
+``on_failure='raise'`` the end of the run. ``fun`` gives one value a point (:func:`minimize`)
+or a vector of outputs (:func:`least_squares`: a point with any non-finite output failed)."""
 
 from __future__ import annotations
 
@@ -104,7 +105,8 @@ class _Evaluator:
     """``fun`` on a run's points, as :func:`minimize`'s options say: ``args``, ``batched``,
     ``seeded``, ``workers`` and ``on_failure``. Counts the failures (:attr:`failures`) and
     keeps the first exception (:attr:`first_error`, and its repr :attr:`first_error_text`,
-    which a checkpoint keeps)."""
+    which a checkpoint keeps). With ``outputs`` (:func:`least_squares`), ``fun`` returns that
+    many outputs a point (0: as many as at the first point), given back flat."""
 
     def __init__(
         self,
@@ -115,12 +117,14 @@ class _Evaluator:
         seeded: bool = False,
         workers: Any = 1,
         on_failure: str = "continue",
+        outputs: Optional[int] = None,
     ) -> None:
         self.fun = fun
         self.args = args
         self.batched = batched
         self.call = _Call(fun, args, seeded)
         self.raise_failures = on_failure == "raise"
+        self.outputs = outputs
         self.failures = 0
         self.exceptions = 0
         self.first_error: Optional[Exception] = None
@@ -146,6 +150,8 @@ class _Evaluator:
     def __call__(self, points: _FloatArray, seeds: npt.NDArray[np.uint64]) -> _FloatArray:
         """The values at ``points`` (one row each) with their ``seeds``: NaN where ``fun``
         raised (under ``'continue'``)."""
+        if self.outputs is not None:
+            return self._rows(points, seeds)
         if self.batched:
             values = self._batch(points, seeds)
         else:
@@ -154,6 +160,35 @@ class _Evaluator:
             values = np.array([self._value(v) for v in raw], dtype=np.float64)
         self.failures += int(np.count_nonzero(~np.isfinite(values)))
         return values
+
+    def _rows(self, points: _FloatArray, seeds: npt.NDArray[np.uint64]) -> _FloatArray:
+        """A vector ``fun``'s outputs at ``points``, flat: a row of NaN where it raised."""
+        items = [(points[k].copy(), int(seeds[k])) for k in range(len(points))]
+        raw = map(self.call, items) if self._map is None else self._map(self.call, items)
+        rows = [self._row(v) for v in raw]
+        self.failures += sum(1 for row in rows if not np.isfinite(row).all())
+        return np.concatenate(rows) if rows else np.zeros(0)
+
+    def _row(self, value: Any) -> _FloatArray:
+        """One point's outputs, as many as at the first point."""
+        if isinstance(value, _Raised):
+            if not self.outputs:
+                raise value.error  # the first point's outputs give their count: none to fill
+            self._raised(value.error)
+            return np.full(self.outputs, math.nan)
+        try:
+            row = np.asarray(value, dtype=np.float64).ravel()
+        except (TypeError, ValueError) as e:
+            raise TypeError(f"fun must return an array of real numbers, it returned {_show(value)}") from e
+        if row.size == 0:
+            raise ValueError("fun returned an empty array: it must return at least one value")
+        if not self.outputs:
+            self.outputs = row.size
+        elif row.size != self.outputs:
+            raise ValueError(
+                f"fun returned {row.size} values at this point, {self.outputs} at x0: the count must not change"
+            )
+        return row
 
     def _batch(self, points: _FloatArray, seeds: npt.NDArray[np.uint64]) -> _FloatArray:
         batch = points.copy()

@@ -255,7 +255,8 @@ class _AskTell:
     def result(self) -> dict[str, Any] | None: ...
 
 class _LeastSquares:
-    """The Rust side of ``plateau_free.least_squares``: a ``LeastSquaresAskTell`` run."""
+    """The Rust side of ``plateau_free.least_squares``: a ``LeastSquaresAskTell`` run, driven
+    by :func:`_drive`."""
 
     def __init__(
         self,
@@ -272,11 +273,14 @@ class _LeastSquares:
         smoothed_residuals: bool,
         bounds: tuple[list[float], list[float]] | None,
         seed: int,
+        on_failure: str = "continue",
     ) -> None: ...
     def ask(self) -> tuple[Any, Any] | None: ...
     def tell(self, outputs: list[float]) -> None: ...
     @property
     def evaluations(self) -> int: ...
+    @property
+    def done(self) -> bool: ...
     def result(self) -> tuple[list[float], float, list[float], int, int, int]: ...
 
 def _rust_reference_estimates(
@@ -310,7 +314,7 @@ def _rust_reference_minimize_adaptive(
 ) -> dict[str, Any]: ...
 def _replace_file(path: str, data: bytes) -> None: ...
 def _drive(
-    run: _AskTell,
+    run: Union[_AskTell, _LeastSquares],
     evaluate: Callable[[Any, Any], Any],
     *,
     disp: bool = False,

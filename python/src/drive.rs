@@ -1,18 +1,20 @@
-//! `_drive`: a `plateau_free.minimize` run (adaptive, polished, the paper's loop) driven by
-//! the library's [`Driver`], so that the run's lifecycle (interrupt, progress line, history,
-//! checkpoint) is the library's, written once.
+//! `_drive`: a `plateau_free.minimize` run (adaptive, polished, the paper's loop) or a
+//! `plateau_free.least_squares` run driven by the library's [`Driver`], so that the run's
+//! lifecycle (interrupt, progress line, history, checkpoint) is the library's, written once.
+//! [`Driven`] holds either run through `driven_runs.rs`'s [`DrivenRun`].
 //!
 //! Python keeps what is Python's: the evaluator (`evaluate(points, seeds) -> values`: `args`,
 //! workers and executors, exceptions counted as failures, `on_failure='raise'`), the callback's
-//! arguments and the result's fields. The run is a copy of the `_AskTell`'s, put back at the
-//! end (also when the run fails), so the result is read from the `_AskTell` as before.
+//! arguments and the result's fields. The run is a copy of the `_AskTell`'s (or the
+//! `_LeastSquares`'), put back at the end (also when the run fails), so the result is read
+//! from that object as before.
 
 use std::collections::HashSet;
 use std::io::Write;
 use std::sync::OnceLock;
 
 use super::*;
-use crate::ask_tell::{best_of, copy_of, last_step_of, Run};
+use crate::driven_runs::DrivenRun;
 use plateau_free::lifecycle::{
     AskAndTell, Checkpoint, Driver, Interrupt, ProgressLine, Trace, TraceRow,
 };
@@ -29,11 +31,11 @@ struct Side {
     restored: Option<(usize, bool)>,
 }
 
-/// The run as the driver holds it: the `_AskTell`'s run with its history and the evaluator's
-/// failure counts (saved with it), the Python settings a checkpoint must match, and the
-/// callback.
-struct Driven {
-    run: Run,
+/// The run as the driver holds it: the `_AskTell`'s or `_LeastSquares`' run with its history
+/// and the evaluator's failure counts (saved with it), the Python settings a checkpoint must
+/// match, and the callback.
+struct Driven<R> {
+    run: R,
     shape: Vec<usize>,
     trace: Trace,
     settings: Vec<(&'static str, String)>,
@@ -53,20 +55,20 @@ struct Counts {
 
 /// A checkpoint's state: the run, its history, the counts.
 #[derive(serde::Serialize)]
-struct SavedView<'a> {
-    run: &'a Run,
+struct SavedView<'a, R> {
+    run: &'a R,
     trace: &'a Trace,
     counts: Counts,
 }
 
 #[derive(serde::Deserialize)]
 struct Saved {
-    run: Run,
+    run: serde_json::Value,
     trace: Trace,
     counts: Counts,
 }
 
-impl Driven {
+impl<R: DrivenRun> Driven<R> {
     fn side(&self) -> std::sync::MutexGuard<'_, Side> {
         self.side.lock().unwrap_or_else(|p| p.into_inner())
     }
@@ -82,8 +84,9 @@ impl Driven {
     }
 
     /// After an iteration: a pending Ctrl-C, then the callback (`after(nit, nfev, info)`,
-    /// `info` the adaptive search's best `(x, fun)` or the paper loop's last step); a truthy
-    /// return or an exception ends the run.
+    /// `info` the adaptive search's best `(x, fun)`, the paper loop's last step, or the
+    /// least-squares run's current `(x, fun)`); a truthy return or an exception ends the
+    /// run.
     fn after_iteration(&self, py: Python<'_>, iteration: usize) {
         if py.check_signals().is_err() {
             return self.stop("interrupted", None);
@@ -91,13 +94,7 @@ impl Driven {
         let Some(after) = &self.after else {
             return;
         };
-        let info = match &self.run {
-            Run::Adaptive(_) => best_of(py, &self.run, &self.shape)
-                .and_then(|b| b.into_pyobject(py).map(|o| o.into_any().unbind())),
-            Run::Paper(_) => last_step_of(py, &self.run, &self.shape)
-                .and_then(|s| s.into_pyobject(py).map(|o| o.into_any().unbind())),
-        };
-        let called = info.and_then(|info| {
+        let called = self.run.info(py, &self.shape).and_then(|info| {
             after
                 .call1(py, (iteration, self.run.evaluations(), info))
                 .and_then(|r| r.bind(py).is_truthy())
@@ -127,7 +124,7 @@ impl Driven {
 }
 
 /// A checkpoint error naming what Python refused.
-fn state_error(reason: impl std::fmt::Display) -> Error {
+pub(crate) fn state_error(reason: impl std::fmt::Display) -> Error {
     Error::Checkpoint {
         path: String::new(),
         reason: reason.to_string(),
@@ -135,13 +132,13 @@ fn state_error(reason: impl std::fmt::Display) -> Error {
 }
 
 /// A driven run's end: the run and its history.
-struct Ended {
-    run: Run,
+struct Ended<R> {
+    run: R,
     trace: Trace,
 }
 
-impl AskAndTell for Driven {
-    type Output = Ended;
+impl<R: DrivenRun> AskAndTell for Driven<R> {
+    type Output = Ended<R>;
 
     fn ask(&mut self) -> Result<Option<Ask<'_>>, Error> {
         self.run.ask_points()
@@ -163,6 +160,10 @@ impl AskAndTell for Driven {
             self.stop("interrupted", None);
         }
         Ok(())
+    }
+
+    fn values_per_point(&self) -> usize {
+        self.run.values_per_point()
     }
 
     fn evaluations(&self) -> usize {
@@ -189,18 +190,16 @@ impl AskAndTell for Driven {
         Python::attach(|py| self.counts(py).map_or(0, |c| c.failures))
     }
 
-    fn finish(self) -> Result<Ended, Error> {
+    fn finish(self) -> Result<Ended<R>, Error> {
         Ok(Ended {
             run: self.run,
             trace: self.trace,
         })
     }
 
-    fn so_far(&self) -> Ended {
+    fn so_far(&self) -> Ended<R> {
         Ended {
-            // The run's own serde state read back: it holds only numbers, so this cannot
-            // fail.
-            run: copy_of(&self.run).expect("a run's serde state reads back"),
+            run: self.run.copy(),
             trace: self.trace.clone(),
         }
     }
@@ -230,8 +229,8 @@ impl AskAndTell for Driven {
     fn restore(&mut self, bytes: &[u8]) -> Result<(), Error> {
         let saved: Saved = serde_json::from_slice(bytes)
             .map_err(|e| state_error(format!("damaged state: {e}")))?;
+        self.run.restore_state(saved.run)?;
         Python::attach(|py| self.set_counts(py, &saved.counts)).map_err(state_error)?;
-        self.run = saved.run;
         self.trace = saved.trace;
         self.side().restored = Some((self.run.iteration(), self.run.is_done()));
         Ok(())
@@ -325,8 +324,107 @@ fn evaluate_ask(
     Ok(())
 }
 
-/// Runs `run` (an `_AskTell`) to its end with the library's driver, `evaluate` (an
-/// `_Evaluator`: callable on `(points, seeds)`, with the attributes `failures`,
+/// How a run is driven: `_drive`'s keywords.
+struct Setup {
+    disp: bool,
+    keep: usize,
+    checkpoint: Option<std::path::PathBuf>,
+    checkpoint_every: Option<usize>,
+    settings: Vec<(String, String)>,
+    after: Option<Py<PyAny>>,
+}
+
+/// A driven run's end: the run, put back into its Python object, and the end's dict (or the
+/// error, the run so far put back).
+struct Outcome<R> {
+    run: Option<R>,
+    ended: PyResult<Py<PyDict>>,
+}
+
+/// Runs `run` (shaped `shape` for Python) to its end as `setup` says, with `evaluate` giving
+/// the values.
+fn drive_run<R: DrivenRun>(
+    py: Python<'_>,
+    run: R,
+    shape: Vec<usize>,
+    evaluate: &Bound<'_, PyAny>,
+    setup: Setup,
+) -> Outcome<R> {
+    let interrupt = Interrupt::new();
+    let side = Arc::new(Mutex::new(Side::default()));
+    let driven = Driven {
+        run,
+        shape: shape.clone(),
+        trace: Trace::new(setup.keep),
+        settings: setup
+            .settings
+            .iter()
+            .map(|(n, v)| (interned(n), v.clone()))
+            .collect(),
+        evaluator: evaluate.clone().unbind(),
+        after: setup.after,
+        interrupt: interrupt.clone(),
+        side: side.clone(),
+    };
+    let mut driver = Driver::new().interrupt(interrupt);
+    if setup.disp {
+        driver = driver.observe(ProgressLine::new(Stdout));
+    }
+    if let Some(path) = setup.checkpoint {
+        let saved = Checkpoint::new(path);
+        driver = driver.checkpoint(match setup.checkpoint_every {
+            Some(k) => saved.every_iterations(k),
+            None => saved,
+        });
+    }
+    let ended = driver.run(driven, |_, ask, out| {
+        evaluate_ask(py, evaluate, &shape, ask, out)
+    });
+    let mut side = std::mem::take(&mut *side.lock().unwrap_or_else(|p| p.into_inner()));
+    match ended {
+        Ok(end) => Outcome {
+            run: Some(end.run),
+            ended: match side.raised.take() {
+                Some(error) => Err(error),
+                None => end_dict(py, &side, &end.trace),
+            },
+        },
+        Err(failure) => {
+            let run = failure.result.map(|end| end.run);
+            let error = match failure.error {
+                DriveError::Python(error) => error,
+                DriveError::Library(error) => match &run {
+                    Some(run) => run.python_error(error),
+                    None => value_error(error),
+                },
+            };
+            Outcome {
+                run,
+                ended: Err(error),
+            }
+        }
+    }
+}
+
+/// The end of a run that finished or was stopped: `why`, `restored`, `rows`, `dropped` (see
+/// [`_drive`]).
+fn end_dict(py: Python<'_>, side: &Side, trace: &Trace) -> PyResult<Py<PyDict>> {
+    let rows: Vec<(usize, f64, f64)> = trace
+        .rows()
+        .iter()
+        .map(|r| (r.evaluations, r.best, r.sigma))
+        .collect();
+    let out = PyDict::new(py);
+    out.set_item("why", side.why)?;
+    out.set_item("restored", side.restored)?;
+    out.set_item("dropped", trace.iterations_seen() - rows.len())?;
+    out.set_item("rows", rows)?;
+    Ok(out.unbind())
+}
+
+/// Runs `run` (an `_AskTell` or a `_LeastSquares`) to its end with the library's driver,
+/// `evaluate` (an `_Evaluator`: callable on `(points, seeds)`, giving a value per point, or
+/// a least-squares run's outputs per point, flat; with the attributes `failures`,
 /// `exceptions` and `first_error_text` that a checkpoint keeps) giving the values. The
 /// run's end is put back into `run`. Returns a dict: `why` (None for a run that ended by
 /// itself, else `"interrupted"`, `"callback"`), `restored` (None, or `(iteration,
@@ -347,7 +445,7 @@ fn evaluate_ask(
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn _drive<'py>(
     py: Python<'py>,
-    run: PyRef<'py, PyAskTell>,
+    run: Bound<'py, PyAny>,
     evaluate: Bound<'py, PyAny>,
     disp: bool,
     keep: usize,
@@ -356,69 +454,31 @@ pub(crate) fn _drive<'py>(
     settings: Vec<(String, String)>,
     after: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (held, shape) = run.copy_run(py)?;
-    let interrupt = Interrupt::new();
-    let side = Arc::new(Mutex::new(Side::default()));
-    let driven = Driven {
-        run: held,
-        shape: shape.clone(),
-        trace: Trace::new(keep),
-        settings: settings
-            .iter()
-            .map(|(n, v)| (interned(n), v.clone()))
-            .collect(),
-        evaluator: evaluate.clone().unbind(),
+    let setup = Setup {
+        disp,
+        keep,
+        checkpoint,
+        checkpoint_every,
+        settings,
         after,
-        interrupt: interrupt.clone(),
-        side: side.clone(),
     };
-    let mut driver = Driver::new().interrupt(interrupt);
-    if disp {
-        driver = driver.observe(ProgressLine::new(Stdout));
-    }
-    if let Some(path) = checkpoint {
-        let saved = Checkpoint::new(path);
-        driver = driver.checkpoint(match checkpoint_every {
-            Some(k) => saved.every_iterations(k),
-            None => saved,
-        });
-    }
-    let ended = driver.run(driven, |_, ask, out| {
-        evaluate_ask(py, &evaluate, &shape, ask, out)
-    });
-    let mut side = std::mem::take(&mut *side.lock().unwrap_or_else(|p| p.into_inner()));
-    let trace = match ended {
-        Ok(end) => {
-            run.put_run(py, end.run)?;
-            end.trace
+    let ended = if let Ok(ask_tell) = run.cast::<PyAskTell>() {
+        let ask_tell = ask_tell.borrow();
+        let (held, shape) = ask_tell.copy_run(py)?;
+        let outcome = drive_run(py, held, shape, &evaluate, setup);
+        if let Some(end) = outcome.run {
+            ask_tell.put_run(py, end)?;
         }
-        Err(failure) => {
-            let mut final_asked = false;
-            if let Some(end) = failure.result {
-                final_asked = matches!(&end.run, Run::Paper(p) if p.final_asked);
-                run.put_run(py, end.run)?;
-            }
-            return Err(match failure.error {
-                DriveError::Python(error) => error,
-                DriveError::Library(error @ Error::NonFiniteValue { .. }) if final_asked => {
-                    PyValueError::new_err(format!("{error}: the final evaluation must be finite"))
-                }
-                DriveError::Library(error) => value_error(error),
-            });
+        outcome.ended
+    } else {
+        let vector = run.cast::<PyLeastSquares>()?.borrow();
+        let held = vector.copy_run(py)?;
+        let shape = vec![held.theta().len()];
+        let outcome = drive_run(py, held, shape, &evaluate, setup);
+        if let Some(end) = outcome.run {
+            vector.put_run(py, end)?;
         }
+        outcome.ended
     };
-    if let Some(error) = side.raised.take() {
-        return Err(error);
-    }
-    let rows: Vec<(usize, f64, f64)> = trace
-        .rows()
-        .iter()
-        .map(|r| (r.evaluations, r.best, r.sigma))
-        .collect();
-    let out = PyDict::new(py);
-    out.set_item("why", side.why)?;
-    out.set_item("restored", side.restored)?;
-    out.set_item("dropped", trace.iterations_seen() - rows.len())?;
-    out.set_item("rows", rows)?;
-    Ok(out)
+    ended.map(|dict| dict.into_bound(py))
 }

@@ -1,7 +1,7 @@
 //! The vector (least-squares) method from Python: `_LeastSquares`, which
 //! `plateau_free.least_squares(fun, x0, ...)` (`python/plateau_free/_least_squares.py`)
-//! drives. Nothing here calls Python: the caller evaluates the asked points and tells their
-//! output vectors back.
+//! runs on the library's driver (`drive.rs`, as `minimize`'s runs). Nothing here calls
+//! Python: the caller evaluates the asked points and tells their output vectors back.
 
 use super::*;
 use plateau_free::{
@@ -12,11 +12,36 @@ use plateau_free::{
 ///
 /// `ask()` gives `(X, seeds)`: `X` a float64 array of shape `(k, n)`, `seeds` a uint64 array
 /// of length `k`, or None once the budget is spent. `tell(outputs)` takes `k * m` floats
-/// (the outputs of the points, row by row). Every error is a ValueError naming the value;
-/// calls from several threads run one at a time.
+/// (the outputs of the points, row by row; a point with a non-finite output is a failure,
+/// counted under `on_failure='continue'`, a ValueError under `'raise'`). Every error is a
+/// ValueError naming the value; calls from several threads run one at a time.
 #[pyclass(module = "plateau_free._native", name = "_LeastSquares", frozen)]
 pub(crate) struct PyLeastSquares {
     run: Guarded<LeastSquaresAskTell>,
+}
+
+impl PyLeastSquares {
+    /// A copy of the run, for the library's driver.
+    pub(crate) fn copy_run(&self, py: Python<'_>) -> PyResult<LeastSquaresAskTell> {
+        Ok(self.run.lock(py)?.clone())
+    }
+
+    /// Replaces the run (with the driven run's end).
+    pub(crate) fn put_run(&self, py: Python<'_>, run: LeastSquaresAskTell) -> PyResult<()> {
+        *self.run.lock(py)? = run;
+        Ok(())
+    }
+}
+
+/// `"continue"` or `"raise"`.
+fn failure_policy(name: &str) -> PyResult<FailurePolicy> {
+    match name {
+        "continue" => Ok(FailurePolicy::Continue),
+        "raise" => Ok(FailurePolicy::Raise),
+        other => Err(PyValueError::new_err(format!(
+            "on_failure = {other:?} is not a policy: use 'continue' or 'raise'"
+        ))),
+    }
 }
 
 /// `"descent"` or `"always"`.
@@ -33,9 +58,9 @@ fn acceptance(name: &str) -> PyResult<Acceptance> {
 #[pymethods]
 impl PyLeastSquares {
     /// A run from `x0` for `outputs` outputs; `sparsity`: `(output, parameter)` pairs, or
-    /// None for every output on every parameter.
+    /// None for every output on every parameter; `on_failure`: `'continue'` or `'raise'`.
     #[new]
-    #[pyo3(signature = (x0, outputs, sparsity, budget, sigma0, pairs, memory, damping, max_step, acceptance_name, smoothed_residuals, bounds, seed))]
+    #[pyo3(signature = (x0, outputs, sparsity, budget, sigma0, pairs, memory, damping, max_step, acceptance_name, smoothed_residuals, bounds, seed, on_failure="continue"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         x0: Vec<f64>,
@@ -51,6 +76,7 @@ impl PyLeastSquares {
         smoothed_residuals: bool,
         bounds: Option<(Vec<f64>, Vec<f64>)>,
         seed: u64,
+        on_failure: &str,
     ) -> PyResult<Self> {
         let n = x0.len();
         let pattern = match sparsity {
@@ -67,7 +93,8 @@ impl PyLeastSquares {
             .max_step(max_step)
             .acceptance(acceptance(acceptance_name)?)
             .smoothed_residuals(smoothed_residuals)
-            .seed(seed);
+            .seed(seed)
+            .on_failure(failure_policy(on_failure)?);
         if let Some((lower, upper)) = bounds {
             options = options.bounds(lower, upper);
         }
@@ -103,6 +130,12 @@ impl PyLeastSquares {
     #[getter]
     fn evaluations(&self, py: Python<'_>) -> PyResult<usize> {
         Ok(self.run.lock(py)?.evaluations())
+    }
+
+    /// Whether the run has ended (`ask` gave None).
+    #[getter]
+    fn done(&self, py: Python<'_>) -> PyResult<bool> {
+        Ok(self.run.lock(py)?.finish().is_ok())
     }
 
     /// `(x, fun, residuals, nit, jacobians, nfev)` of the best point so far.

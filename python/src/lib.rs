@@ -39,6 +39,7 @@ mod adaptive;
 mod ask_tell;
 mod convert;
 mod drive;
+mod driven_runs;
 mod estimators;
 mod least_squares;
 mod locking;

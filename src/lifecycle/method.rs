@@ -318,6 +318,10 @@ impl AskAndTell for LeastSquaresAskTell {
         LeastSquaresAskTell::evaluations(self)
     }
 
+    fn budget(&self) -> Option<usize> {
+        Some(LeastSquaresAskTell::budget(self))
+    }
+
     fn iteration(&self) -> usize {
         self.result().nit
     }

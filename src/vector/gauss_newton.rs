@@ -603,6 +603,20 @@ impl LeastSquaresAskTell {
         self.nfev
     }
 
+    /// The most evaluations the run spends ([`LeastSquares::budget`]); the driver's
+    /// progress line shows the evaluations against it.
+    ///
+    /// ```
+    /// use plateau_free::lifecycle::AskAndTell;
+    /// use plateau_free::{LeastSquares, Sparsity};
+    /// let run = LeastSquares::new(Sparsity::dense(1, 1)?).budget(50).ask_tell(&[0.0])?;
+    /// assert_eq!((run.budget(), AskAndTell::budget(&run)), (50, Some(50)));
+    /// # Ok::<(), plateau_free::Error>(())
+    /// ```
+    pub fn budget(&self) -> usize {
+        self.opts.budget
+    }
+
     /// Evaluations told whose outputs were not all finite.
     pub fn failures(&self) -> usize {
         self.failures
