@@ -16,7 +16,7 @@ use std::sync::OnceLock;
 use super::*;
 use crate::driven_runs::DrivenRun;
 use plateau_free::lifecycle::{
-    AskAndTell, Checkpoint, Driver, Interrupt, ProgressLine, Trace, TraceRow,
+    AskAndTell, Checkpoint, Driver, Interrupt, Observer, Progress, ProgressLine, Trace, TraceRow,
 };
 use plateau_free::Ask;
 
@@ -263,6 +263,25 @@ impl Write for Stdout {
     }
 }
 
+/// A `RuntimeWarning` for a checkpoint that could not be written during the run (a full
+/// disk, a folder removed): the run goes on, the file written last stays.
+struct WarnNotSaved;
+
+impl Observer for WarnNotSaved {
+    fn observe(&mut self, _: &Progress) {}
+
+    fn not_saved(&mut self, error: &plateau_free::Error) {
+        Python::attach(|py| {
+            let text = format!("{error}; the run goes on").replace('\0', " ");
+            let message = std::ffi::CString::new(text).unwrap_or_default();
+            let category = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
+            // Warnings turned into errors cannot end the run from here: the next write
+            // tries again, and the last one fails the run if the file still cannot be written.
+            let _ = PyErr::warn(py, category.as_any(), &message, 1);
+        });
+    }
+}
+
 /// A setting's name for a checkpoint's identity, which takes static names: interned, each
 /// name once per process (the names are `minimize`'s options, a fixed set).
 fn interned(name: &str) -> &'static str {
@@ -371,6 +390,7 @@ fn drive_run<R: DrivenRun>(
         driver = driver.observe(ProgressLine::new(Stdout));
     }
     if let Some(path) = setup.checkpoint {
+        driver = driver.observe(WarnNotSaved);
         let saved = Checkpoint::new(path);
         driver = driver.checkpoint(match setup.checkpoint_every {
             Some(k) => saved.every_iterations(k),

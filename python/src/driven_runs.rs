@@ -6,7 +6,7 @@ use super::*;
 use crate::ask_tell::{best_of, copy_of, last_step_of, Run};
 use crate::drive::state_error;
 use plateau_free::lifecycle::AskAndTell;
-use plateau_free::{Ask, LeastSquaresAskTell};
+use plateau_free::{vector::LeastSquaresAskTell, Ask};
 
 /// A run that `drive.rs`'s `Driven` drives for Python: the `_AskTell`'s [`Run`] or a
 /// [`LeastSquaresAskTell`]. What the library's [`AskAndTell`] says, plus what Python needs:

@@ -200,3 +200,42 @@ def test_a_kept_history_continues_from_the_file(tmp_path: Path) -> None:
     same(alone, resumed)
     assert len(resumed.history) == 5 and resumed.history.dropped == OPTIONS["iterations"] - 5
     assert alone.history.x.tobytes() == resumed.history.x.tobytes()
+
+
+def test_a_path_that_cannot_be_written_fails_before_any_evaluation(tmp_path: Path) -> None:
+    calls = []
+
+    def f(x: np.ndarray) -> float:
+        calls.append(1)
+        return staircase(x)
+
+    path = tmp_path / "no-such-folder" / "run.json"
+    with pytest.raises(ValueError, match="run.json"):
+        plateau_free.minimize(f, np.zeros(3), budget=300, seed=1, checkpoint=str(path))
+    assert calls == []
+
+
+def test_a_write_that_fails_during_the_run_warns_and_the_run_goes_on(tmp_path: Path) -> None:
+    # The checkpoint's folder is removed at evaluation 40 and made again at evaluation 200:
+    # the writes due between warn, the run is the run left alone.
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    calls = [0]
+
+    def f(x: np.ndarray) -> float:
+        calls[0] += 1
+        if calls[0] == 40:
+            for p in folder.iterdir():
+                p.unlink()
+            folder.rmdir()
+        if calls[0] == 200:
+            folder.mkdir()
+        return staircase(x)
+
+    alone = plateau_free.minimize(staircase, np.zeros(3), budget=400, seed=2)
+    with pytest.warns(RuntimeWarning, match="not written.*the run goes on"):
+        res = plateau_free.minimize(
+            f, np.zeros(3), budget=400, seed=2, checkpoint=str(folder / "run.json"),
+            checkpoint_every=1,
+        )
+    assert np.array_equal(res.x, alone.x) and res.fun == alone.fun and res.nfev == alone.nfev

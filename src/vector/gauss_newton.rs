@@ -608,7 +608,7 @@ impl LeastSquaresAskTell {
     ///
     /// ```
     /// use plateau_free::lifecycle::AskAndTell;
-    /// use plateau_free::{LeastSquares, Sparsity};
+    /// use plateau_free::{LeastSquares, vector::Sparsity};
     /// let run = LeastSquares::new(Sparsity::dense(1, 1)?).budget(50).ask_tell(&[0.0])?;
     /// assert_eq!((run.budget(), AskAndTell::budget(&run)), (50, Some(50)));
     /// # Ok::<(), plateau_free::Error>(())
