@@ -17,7 +17,7 @@ from ._checks import _box, _counter, _flag, _not_nan, _positive, _show, _start
 from ._drive import _fresh_error_if_all_failed, _Run
 from ._evaluate import _Evaluator
 from ._minimize import _Callback
-from ._options import _OPTIONS
+from ._options import _OPTIONS, _says_instead
 from ._result import OptimizeResult, _stopped_result
 from ._saved import _setting_pairs, _settings
 from ._types import _FloatArray
@@ -148,6 +148,7 @@ def _at_start(
     return result
 
 
+@_says_instead
 def least_squares(
     fun: Callable[..., npt.ArrayLike],
     x0: npt.ArrayLike,

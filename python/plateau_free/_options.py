@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
+import inspect
 import os
-from typing import TYPE_CHECKING, Any, Callable, NamedTuple, Optional, Sequence, TypedDict, Union, cast
+from typing import TYPE_CHECKING, Any, Callable, NamedTuple, Optional, Sequence, TypedDict, TypeVar, Union, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -275,16 +277,39 @@ _SAY_INSTEAD = {
 }
 
 
-def _refuse_unknown(where: str, options: dict[str, Any]) -> None:
-    """A TypeError naming each keyword that is no option, and the word to use instead."""
+def _refuse_unknown(where: str, options: dict[str, Any], known: Optional[Sequence[str]] = None) -> None:
+    """A TypeError naming each keyword that is no option (of ``known``, default every option
+    of :func:`minimize`), and the word to use instead."""
+    names = list(_OPTIONS) if known is None else list(known)
     for name in options:
-        if name in _OPTIONS:
+        if name in names:
             continue
         hint = _SAY_INSTEAD.get(name)
+        word = (hint or "").split(" ")[0]
+        if word.endswith("=") and word[:-1] not in names:
+            hint = None  # the word to use is not a keyword of this function
         if hint is None:
-            close = difflib.get_close_matches(name, list(_OPTIONS), n=1)
-            hint = f"{close[0]}=" if close else "one of " + ", ".join(sorted(_OPTIONS))
+            close = difflib.get_close_matches(name, names, n=1)
+            hint = f"{close[0]}=" if close else "one of " + ", ".join(sorted(names))
         raise TypeError(f"{where}() got an unexpected keyword argument {name!r}: use {hint}")
+
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def _says_instead(function: _F) -> _F:
+    """``function`` with :func:`_refuse_unknown`'s TypeError for a keyword it does not take
+    (``maxiter=``: "use budget="), its signature unchanged for type checkers."""
+    parameters = inspect.signature(function).parameters
+    keywords = [n for n, p in parameters.items() if p.kind is not inspect.Parameter.POSITIONAL_ONLY]
+
+    @functools.wraps(function)
+    def checked(*args: Any, **kwargs: Any) -> Any:
+        _refuse_unknown(function.__name__, {k: v for k, v in kwargs.items() if k not in parameters},
+                        keywords)  # fmt: skip
+        return function(*args, **kwargs)
+
+    return cast(_F, checked)
 
 
 def _owners(name: str) -> str:

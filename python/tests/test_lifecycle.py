@@ -66,6 +66,16 @@ def test_words_of_other_libraries_name_the_word_to_use(word: str, use: str) -> N
         plateau_free.ask_tell(X0, **{word: 10})
 
 
+@pytest.mark.parametrize(
+    "word, use",
+    [("maxiter", "budget="), ("max_evals", "budget="), ("verbose", "disp="),
+     ("random_state", "seed="), ("budgt", "budget="), ("tol", "one of acceptance")],
+)  # fmt: skip
+def test_least_squares_names_the_word_to_use_too(word: str, use: str) -> None:
+    with pytest.raises(TypeError, match=rf"least_squares\(\) got an unexpected keyword argument '{word}': use {re.escape(use)}"):
+        plateau_free.least_squares(lambda x: x - 1.0, np.zeros(2), **{word: 10})
+
+
 # -- conventions -----------------------------------------------------------------------------
 
 
@@ -477,8 +487,9 @@ def test_least_squares_raise_carries_the_result_so_far() -> None:
     so_far = info.value.result  # type: ignore[attr-defined]
     assert so_far.status == 3 and so_far.nfev < 300 and so_far.fun < rosenbrock(np.array(LS_X0))
     assert so_far.fun == squares(residuals(so_far.x))
+
     def infinite(x: np.ndarray) -> np.ndarray:
-        return residuals(x) / (x[0] > -0.45)
+        return residuals(x) if x[0] > -0.45 else np.full_like(residuals(x), np.inf)
 
     with pytest.raises(ValueError, match="returned inf at evaluation") as nan:
         plateau_free.least_squares(infinite, [-0.4, 0.5, 0.0, 0.3], on_failure="raise", **LS)
