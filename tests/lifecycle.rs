@@ -5,13 +5,14 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
-use plateau_free::lifecycle::{
-    AskAndTell, Driver, Interrupt, Observer, Progress, ProgressLine, Trace,
-};
+use plateau_free::lifecycle::{AskAndTell, Driver, Interrupt, ProgressLine, Trace};
 use plateau_free::{
     run::FailurePolicy, run::Metric, run::Strategy, vector::Sparsity, Adam, Annealer, Ask, Error,
     LeastSquares, Minimizer, Optimizer, PlateauFreeGradient, Stop,
 };
+
+mod common;
+use common::StopAt;
 
 /// A plain objective, as a function pointer (one type for every run of a test).
 type Plain = fn(&[f64]) -> f64;
@@ -44,17 +45,6 @@ fn strategies_of<F: plateau_free::Objective + Clone>(f: F, seed: u64) -> [Minimi
 /// [`strategies_of`] Rosenbrock.
 fn strategies(seed: u64) -> [Minimizer<Plain>; 3] {
     strategies_of(rosenbrock as Plain, seed)
-}
-
-/// Triggers `interrupt` once the run has completed `at` iterations.
-struct StopAt(usize, Interrupt);
-
-impl Observer for StopAt {
-    fn observe(&mut self, p: &Progress) {
-        if p.iteration >= self.0 {
-            self.1.trigger();
-        }
-    }
 }
 
 #[test]
@@ -407,7 +397,7 @@ fn dimension_one_and_a_huge_dimension() {
 #[cfg(feature = "serde")]
 mod checkpoints {
     use super::*;
-    use plateau_free::lifecycle::{Checkpoint, Workers};
+    use plateau_free::lifecycle::Checkpoint;
     use plateau_free::Minimum;
 
     /// A fresh file name in the temporary directory.
@@ -527,54 +517,6 @@ mod checkpoints {
             .run_with(&x0, Driver::new().checkpoint(Checkpoint::new(&path)))
             .unwrap();
         assert_eq!(resumed, alone);
-    }
-
-    #[test]
-    fn least_squares_resumes_bit_for_bit() {
-        // Residuals with failures (a NaN output past x0 > 0.8) and a box: the saved state
-        // keeps the damping, the averaged Jacobian and the failed pairs' count.
-        let r = |x: &[f64], _: u64, out: &mut [f64]| {
-            out[0] = x[0] - 1.5;
-            out[1] = if x[0] > 0.8 {
-                f64::NAN
-            } else {
-                2.0 * (x[1] + 0.5)
-            };
-            out[2] = x[0] * x[1];
-        };
-        let ls = LeastSquares::new(Sparsity::dense(3, 2).unwrap())
-            .budget(300)
-            .bounds(vec![-2.0, -2.0], vec![2.0, 2.0])
-            .seed(4);
-        let run = || ls.ask_tell(&[0.0, 0.0]).unwrap();
-        let evaluate =
-            |w: &Workers, ask: Ask<'_>, out: &mut [f64]| w.evaluate_rows(&r, ask, 3, out);
-        let alone = Driver::new().run(run(), evaluate).unwrap();
-        assert!(alone.failures > 0, "{alone:?}");
-        let path = path("least-squares.json");
-        let stop = Interrupt::new();
-        let first = Driver::new()
-            .interrupt(stop.clone())
-            .observe(StopAt(6, stop))
-            .checkpoint(Checkpoint::new(&path))
-            .run(run(), evaluate)
-            .unwrap();
-        assert!(first.nfev < alone.nfev);
-        let resumed = Driver::new()
-            .checkpoint(Checkpoint::new(&path))
-            .run(run(), evaluate)
-            .unwrap();
-        assert_eq!(resumed, alone);
-        let other = ls.clone().seed(5).ask_tell(&[0.0, 0.0]).unwrap();
-        let refused = Driver::new()
-            .checkpoint(Checkpoint::new(&path))
-            .run(other, evaluate)
-            .unwrap_err();
-        assert!(
-            refused.error.to_string().contains("options"),
-            "{}",
-            refused.error
-        );
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use super::jacobian::{check_outputs, draw, pair_seed, Accumulator};
 use super::solve::damped_step;
-use super::{Acceptance, Sparsity};
+use super::{Acceptance, Sparsity, VectorMinimum};
 use crate::check;
 use crate::error::Error;
 use crate::objective::Points;
@@ -282,26 +282,6 @@ impl LeastSquares {
         }
         run.finish()
     }
-}
-
-/// The result of a [`LeastSquares`] run: the best point evaluated and its outputs.
-#[derive(Debug, Clone, PartialEq)]
-pub struct VectorMinimum {
-    /// The best point evaluated (the start, or a step's point).
-    pub x: Vec<f64>,
-    /// Its sum of squares `sum_i r_i(x)^2`.
-    pub fun: f64,
-    /// Its outputs.
-    pub residuals: Vec<f64>,
-    /// Steps taken.
-    pub nit: usize,
-    /// Jacobian estimates made.
-    pub jacobians: usize,
-    /// Evaluations of `r` (at most the budget).
-    pub nfev: usize,
-    /// Evaluations with a non-finite output ([`LeastSquares::on_failure`]); never the best
-    /// point (`fun` is infinite only when every evaluation failed).
-    pub failures: usize,
 }
 
 /// What the next ask evaluates.

@@ -26,10 +26,12 @@
 mod acceptance;
 mod gauss_newton;
 mod jacobian;
+mod minimum;
 mod solve;
 mod sparsity;
 
 pub use acceptance::Acceptance;
-pub use gauss_newton::{LeastSquares, LeastSquaresAskTell, VectorMinimum};
+pub use gauss_newton::{LeastSquares, LeastSquaresAskTell};
 pub use jacobian::{smoothed_jacobian, JacobianEstimate};
+pub use minimum::VectorMinimum;
 pub use sparsity::Sparsity;

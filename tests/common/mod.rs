@@ -9,6 +9,7 @@ pub mod fuzz;
 
 use std::fmt::Debug;
 
+use plateau_free::lifecycle::{Interrupt, Observer, Progress};
 use plateau_free::{GradientEstimator, Objective, PlateauFreeGradient};
 
 /// The 2-D tilted step `1[x + 2y > 0.3]`: from (1, 1) the edge is 2.7 away along `x + 2y`,
@@ -68,4 +69,15 @@ pub fn assert_repeats_sequential_and_parallel<F, T>(
     let first = go(false);
     assert_eq!(first, go(false), "a second sequential run");
     assert_eq!(first, go(true), "parallel evaluation");
+}
+
+/// Triggers `interrupt` once the run has completed `at` iterations.
+pub struct StopAt(pub usize, pub Interrupt);
+
+impl Observer for StopAt {
+    fn observe(&mut self, p: &Progress) {
+        if p.iteration >= self.0 {
+            self.1.trigger();
+        }
+    }
 }

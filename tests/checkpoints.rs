@@ -1,12 +1,19 @@
-//! When the checkpoint file cannot be written: a path that cannot be written fails the run
-//! before any evaluation; a write that fails during the run (a full disk, a folder removed)
-//! is told to the observers and the run goes on, as it would without a checkpoint.
+//! Checkpoint files beyond `tests/lifecycle.rs`'s: the vector method resumed bit for bit;
+//! a path that cannot be written fails the run before any evaluation; a write that fails
+//! during the run (a full disk, a folder removed) is told to the observers and the run goes
+//! on, as it would without a checkpoint.
 #![cfg(feature = "serde")]
+
+mod common;
 
 use std::path::PathBuf;
 
-use plateau_free::lifecycle::{Checkpoint, Driver, Observer, Progress, ProgressLine};
-use plateau_free::{Error, Minimizer};
+use common::StopAt;
+use plateau_free::lifecycle::{
+    Checkpoint, Driver, Interrupt, Observer, Progress, ProgressLine, Workers,
+};
+use plateau_free::vector::Sparsity;
+use plateau_free::{Ask, Error, LeastSquares, Minimizer};
 
 /// A plain objective, as a function pointer (one type for every run of a test).
 type Plain = fn(&[f64]) -> f64;
@@ -118,5 +125,52 @@ fn the_progress_line_warns_of_a_write_that_failed() {
     assert!(
         text.contains("warning: checkpoint") && text.contains("the run goes on"),
         "{text}"
+    );
+}
+
+#[test]
+fn least_squares_resumes_bit_for_bit() {
+    // Residuals with failures (a NaN output past x0 > 0.8) and a box: the saved state
+    // keeps the damping, the averaged Jacobian and the failed pairs' count.
+    let r = |x: &[f64], _: u64, out: &mut [f64]| {
+        out[0] = x[0] - 1.5;
+        out[1] = if x[0] > 0.8 {
+            f64::NAN
+        } else {
+            2.0 * (x[1] + 0.5)
+        };
+        out[2] = x[0] * x[1];
+    };
+    let ls = LeastSquares::new(Sparsity::dense(3, 2).unwrap())
+        .budget(300)
+        .bounds(vec![-2.0, -2.0], vec![2.0, 2.0])
+        .seed(4);
+    let run = || ls.ask_tell(&[0.0, 0.0]).unwrap();
+    let evaluate = |w: &Workers, ask: Ask<'_>, out: &mut [f64]| w.evaluate_rows(&r, ask, 3, out);
+    let alone = Driver::new().run(run(), evaluate).unwrap();
+    assert!(alone.failures > 0, "{alone:?}");
+    let path = folder("least-squares").join("run.json");
+    let stop = Interrupt::new();
+    let first = Driver::new()
+        .interrupt(stop.clone())
+        .observe(StopAt(6, stop))
+        .checkpoint(Checkpoint::new(&path))
+        .run(run(), evaluate)
+        .unwrap();
+    assert!(first.nfev < alone.nfev);
+    let resumed = Driver::new()
+        .checkpoint(Checkpoint::new(&path))
+        .run(run(), evaluate)
+        .unwrap();
+    assert_eq!(resumed, alone);
+    let other = ls.clone().seed(5).ask_tell(&[0.0, 0.0]).unwrap();
+    let refused = Driver::new()
+        .checkpoint(Checkpoint::new(&path))
+        .run(other, evaluate)
+        .unwrap_err();
+    assert!(
+        refused.error.to_string().contains("options"),
+        "{}",
+        refused.error
     );
 }
