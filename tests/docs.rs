@@ -573,6 +573,30 @@ fn docs_stay_under_15_mb() {
     );
 }
 
+/// A source file fits in a reader's head: none of the library, the tests, the bindings, the
+/// path tracer, the studies or the scripts is over 700 lines.
+#[test]
+fn no_source_file_is_over_700_lines() {
+    let Some(root) = repo() else { return };
+    const MOST: usize = 700;
+    let mut long = Vec::new();
+    for dir in [
+        "src", "tests", "benches", "examples", "python", "studies", "scripts",
+    ] {
+        let dir = root.join(dir);
+        if !dir.is_dir() {
+            continue;
+        }
+        for rel in sources(&dir, &["rs", "py", "pyi"]) {
+            let lines = read(&dir.join(&rel)).lines().count();
+            if lines > MOST {
+                long.push(format!("{}/{rel} ({lines} lines)", dir.display()));
+            }
+        }
+    }
+    assert!(long.is_empty(), "over {MOST} lines: {}", long.join(", "));
+}
+
 #[test]
 fn the_number_reader_reads_figures_as_pages_print_them() {
     assert_eq!(
