@@ -6,10 +6,11 @@ use glam::Vec3A;
 use rayon::prelude::*;
 
 use super::film::Image;
-use super::geometry::Surface;
+use super::geometry::{Prim, Surface};
 use super::lanes::QuadLanes;
 use super::last_segment::LastHit;
 use super::material::{sample_cosine, scatter_dielectric, Material};
+use super::path_lanes::RayPack;
 use super::rng::Sampler;
 use super::Scene;
 
@@ -202,7 +203,7 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
             let mut s = 0;
             while s + IN_FLIGHT <= spp {
                 let paths = std::array::from_fn(|k| self.camera_path(x, y, s + k as u32));
-                for l in self.trace_many::<{ IN_FLIGHT as usize }>(paths) {
+                for l in self.trace_many(paths) {
                     add(l);
                 }
                 s += IN_FLIGHT;
@@ -237,13 +238,20 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
         (path.radiance, path.rays)
     }
 
-    /// Radiance of `N` camera samples, their paths advanced in turn, a segment each (each
+    /// Radiance of four camera samples, their paths advanced in turn, a segment each (each
     /// exactly as [`Tracer::trace`] would: the paths share nothing, so the bits are the same).
+    /// Their rays' spheres and quads are tested four paths at once ([`RayPack`]), the same
+    /// answers as one by one.
     #[inline(always)]
-    fn trace_many<const N: usize>(&self, mut paths: [Path; N]) -> [(Vec3A, u32); N] {
+    fn trace_many(&self, mut paths: [Path; 4]) -> [(Vec3A, u32); 4] {
+        let geo = &self.scene.geometry;
         while paths.iter().any(|p| !p.done) {
-            for path in paths.iter_mut().filter(|p| !p.done) {
-                self.segment(path);
+            let pack = RayPack::new(paths.each_ref().map(|p| p.o), paths.each_ref().map(|p| p.d));
+            let shapes = pack.nearest_shape(geo);
+            for (path, shape) in paths.iter_mut().zip(shapes) {
+                if !path.done {
+                    self.segment_after(path, shape);
+                }
             }
         }
         paths.map(|p| (p.radiance, p.rays))
@@ -253,6 +261,14 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
     /// (with next-event estimation) or the end of the path (`path.done`).
     #[inline(always)]
     fn segment(&self, path: &mut Path) {
+        let shape = (self.scene.geometry).nearest_shape(self.lanes, path.o, path.d, f32::INFINITY);
+        self.segment_after(path, shape);
+    }
+
+    /// [`Tracer::segment`] given the closest sphere or quad on the path's ray, `shape`, as
+    /// `Geometry::nearest_shape` finds it with an infinite range.
+    #[inline(always)]
+    fn segment_after(&self, path: &mut Path, shape: (f32, Option<Prim>)) {
         let (scene, s) = (self.scene, self.settings);
         let geo = &scene.geometry;
         if COUNT {
@@ -260,7 +276,7 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
         }
         if path.segments >= s.max_depth {
             // Only an emitter or a miss can still add light: no closest hit needed.
-            match geo.last_hit(self.lanes, path.o, path.d) {
+            match geo.last_hit_after(shape, path.o, path.d) {
                 LastHit::Miss => self.add_environment(path),
                 LastHit::Emitter { t, quad } => {
                     let q = &geo.quads[quad as usize];
@@ -271,7 +287,7 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
             path.done = true;
             return;
         }
-        let Some((_, hit)) = geo.intersect_in(self.lanes, path.o, path.d, f32::INFINITY) else {
+        let Some((_, hit)) = geo.intersect_after(shape, path.o, path.d) else {
             self.add_environment(path);
             path.done = true;
             return;

@@ -37,7 +37,14 @@ impl Geometry {
     /// [`Geometry::intersect_in`] would (`lanes` as there), reduced to whether it is light.
     #[inline(always)]
     pub(crate) fn last_hit(&self, lanes: Option<&[QuadLanes]>, o: Vec3A, d: Vec3A) -> LastHit {
-        match self.nearest_shape(lanes, o, d, f32::INFINITY) {
+        self.last_hit_after(self.nearest_shape(lanes, o, d, f32::INFINITY), o, d)
+    }
+
+    /// [`Geometry::last_hit`] given the closest sphere or quad on the ray, `shape`, as
+    /// [`Geometry::nearest_shape`] finds it with an infinite range.
+    #[inline(always)]
+    pub(crate) fn last_hit_after(&self, shape: (f32, Option<Prim>), o: Vec3A, d: Vec3A) -> LastHit {
+        match shape {
             (_, None) => {
                 if self.rest_occluded(o, d, f32::INFINITY) {
                     LastHit::Dark
