@@ -138,3 +138,74 @@ impl RayPack {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+
+    #[test]
+    fn four_paths_in_lanes_find_what_each_finds_alone() {
+        // Overlapping spheres (rays start inside some), a room of quads with one duplicated
+        // (exact ties: the lower index must win) and one seen edge-on.
+        let mut quads = Vec::new();
+        for k in 0..6 {
+            let f = k as f32;
+            quads.push(Quad::new(
+                Vec3::new(-2.0 + 0.3 * f, -1.0, -3.0 + 0.5 * f),
+                Vec3::new(2.5, 0.2 * f, 0.1),
+                Vec3::new(0.1 * f, 2.0, 0.7),
+                k,
+            ));
+        }
+        quads.push(quads[2]);
+        quads.push(Quad::new(Vec3::ZERO, Vec3::X, Vec3::Y, 9));
+        let geo = Geometry {
+            quads,
+            spheres: vec![
+                Sphere::new(Vec3::new(0.5, 0.0, -1.0), 0.6, 20),
+                Sphere::new(Vec3::new(0.8, 0.2, -1.2), 0.5, 21),
+                Sphere::new(Vec3::new(-1.0, 1.0, 2.0), 1.5, 22),
+            ],
+            ..Default::default()
+        };
+        let mut rng = crate::render::rng::Sampler::new(4, 5, 6);
+        let mut found = [0usize; 4];
+        for _ in 0..20_000 {
+            let ray = |rng: &mut crate::render::rng::Sampler| {
+                let (a, b) = rng.next_2d();
+                let (c, e) = rng.next_2d();
+                let o = Vec3A::new(6.0 * a - 3.0, 4.0 * b - 2.0, 3.0 * c - 0.5);
+                // Some rays lie in the edge-on quad's plane (z = 0) and run along it.
+                let o = if e < 0.05 {
+                    o * Vec3A::new(1.0, 1.0, 0.0)
+                } else {
+                    o
+                };
+                let aim = Vec3A::new(
+                    4.0 * e - 2.0,
+                    3.0 * a - 1.5,
+                    if e < 0.05 { 0.0 } else { -3.0 },
+                );
+                (o, (aim - o).normalize())
+            };
+            let rays: [(Vec3A, Vec3A); 4] = std::array::from_fn(|_| ray(&mut rng));
+            let pack = RayPack::new(rays.map(|r| r.0), rays.map(|r| r.1));
+            let lanes = pack.nearest_shape(&geo);
+            for ((o, d), (t, prim)) in rays.into_iter().zip(lanes) {
+                let (t1, prim1) = geo.nearest_shape(None, o, d, f32::INFINITY);
+                assert_eq!((t.to_bits(), prim), (t1.to_bits(), prim1), "{o} {d}");
+                found[match prim {
+                    None => 0,
+                    Some(Prim::Sphere(_)) => 1,
+                    Some(Prim::Quad(6)) => 3,
+                    Some(_) => 2,
+                }] += 1;
+            }
+        }
+        // Misses, spheres and quads all seen; the duplicate never wins its tie.
+        assert!(found[..3].iter().all(|&n| n > 1000), "{found:?}");
+        assert_eq!(found[3], 0);
+    }
+}

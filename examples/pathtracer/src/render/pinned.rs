@@ -37,3 +37,28 @@ fn task_images_are_those_of_the_renderer_before_the_speed_work() {
         assert_eq!(fnv1a(&image.data), hash, "{name}: the image changed");
     }
 }
+
+/// As above with 5 samples per pixel: four paths traced together (as at every task's default
+/// spp, a multiple of four) and one alone. The hashes are those of the renderer before the
+/// paths' rays were tested in lanes (`--target --scale 0.5 --spp 5 --seed 7`).
+#[test]
+fn task_images_with_paths_in_flight_together_are_pinned() {
+    let expected = [
+        ("cup", 0xbcfb_5dc9_89c4_cef7),
+        ("shadow", 0xd675_7643_2ff3_672f),
+        ("occlusion", 0x0969_f577_6234_031f),
+        ("gi", 0x8b61_388a_9743_7f67),
+        ("sort", 0x7eab_d26f_7574_58ed),
+        ("caustic", 0x3aa9_b839_00f0_6dad),
+        ("texture", 0x6420_8b9a_f18b_e2c0),
+    ];
+    let view = View {
+        scale: Some(0.5),
+        ..View::default()
+    };
+    for (task, (name, hash)) in tasks::all().into_iter().zip(expected) {
+        assert_eq!(task.name(), name);
+        let image = task.render(&task.target(), 7, 5, view);
+        assert_eq!(fnv1a(&image.data), hash, "{name}: the image changed");
+    }
+}
