@@ -43,8 +43,9 @@ impl Settings {
 
 /// Camera paths of a pixel traced together, taking turns segment by segment: each path is a
 /// long chain of dependent square roots and divisions, and independent chains side by side
-/// let the CPU overlap their latencies.
-const IN_FLIGHT: u32 = 4;
+/// let the CPU overlap their latencies; their rays meet the spheres and quads four paths at
+/// once ([`RayPack`]), two packs a turn.
+const IN_FLIGHT: u32 = 8;
 
 /// Renders `scene`: a pure function of (scene, settings). Rows run in parallel with rayon,
 /// but each sample's random numbers come from (seed, pixel, sample) alone and each pixel sums
@@ -184,7 +185,7 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
     }
 
     /// Row `y` of the image into `row` (RGB per pixel): each pixel's samples traced
-    /// `IN_FLIGHT` at a time, the rest one by one. Returns the rays cast (0 unless `COUNT`).
+    /// `IN_FLIGHT` at a time, then four, the rest one by one. Returns the rays cast (0 unless `COUNT`).
     #[inline(always)]
     fn row(&self, y: u32, row: &mut [f32]) -> u64 {
         let spp = self.settings.spp.max(1);
@@ -203,10 +204,17 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
             let mut s = 0;
             while s + IN_FLIGHT <= spp {
                 let paths = std::array::from_fn(|k| self.camera_path(x, y, s + k as u32));
-                for l in self.trace_many(paths) {
+                for l in self.trace_many::<{ IN_FLIGHT as usize }>(paths) {
                     add(l);
                 }
                 s += IN_FLIGHT;
+            }
+            if s + 4 <= spp {
+                let paths = std::array::from_fn(|k| self.camera_path(x, y, s + k as u32));
+                for l in self.trace_many::<4>(paths) {
+                    add(l);
+                }
+                s += 4;
             }
             for s in s..spp {
                 add(self.trace(self.camera_path(x, y, s)));
@@ -238,19 +246,25 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
         (path.radiance, path.rays)
     }
 
-    /// Radiance of four camera samples, their paths advanced in turn, a segment each (each
-    /// exactly as [`Tracer::trace`] would: the paths share nothing, so the bits are the same).
-    /// Their rays' spheres and quads are tested four paths at once ([`RayPack`]), the same
-    /// answers as one by one.
+    /// Radiance of `N` camera samples (a multiple of four), their paths advanced in turn, a
+    /// segment each (each exactly as [`Tracer::trace`] would: the paths share nothing, so the
+    /// bits are the same). Each turn their rays' spheres and quads are tested four paths at
+    /// once ([`RayPack`]), the same answers as one by one; finished paths' lanes idle.
     #[inline(always)]
-    fn trace_many(&self, mut paths: [Path; 4]) -> [(Vec3A, u32); 4] {
+    fn trace_many<const N: usize>(&self, mut paths: [Path; N]) -> [(Vec3A, u32); N] {
         let geo = &self.scene.geometry;
         while paths.iter().any(|p| !p.done) {
-            let pack = RayPack::new(paths.each_ref().map(|p| p.o), paths.each_ref().map(|p| p.d));
-            let shapes = pack.nearest_shape(geo);
-            for (path, shape) in paths.iter_mut().zip(shapes) {
-                if !path.done {
-                    self.segment_after(path, shape);
+            for four in paths.chunks_exact_mut(4) {
+                if four.iter().all(|p| p.done) {
+                    continue;
+                }
+                let o = std::array::from_fn(|k| four[k].o);
+                let d = std::array::from_fn(|k| four[k].d);
+                let shapes = RayPack::new(o, d).nearest_shape(geo);
+                for (path, shape) in four.iter_mut().zip(shapes) {
+                    if !path.done {
+                        self.segment_after(path, shape);
+                    }
                 }
             }
         }
