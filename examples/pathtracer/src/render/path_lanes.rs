@@ -9,7 +9,7 @@
 //! comparisons, NaNs missing), and IEEE arithmetic is the same per lane as in a scalar
 //! register, so every lane finds the same distance bits and, taking shapes in the scalar
 //! order and replacing only on a strictly closer hit, the same shape as
-//! `Geometry::nearest_shape`. Tested against it in `geometry`'s tests.
+//! `Geometry::nearest_shape`. Tested against it below.
 
 use glam::{BVec4A, Vec3A, Vec4};
 
@@ -106,7 +106,7 @@ impl RayPack {
     pub(crate) fn nearest_shape(&self, geo: &Geometry) -> [(f32, Option<Prim>); 4] {
         let mut best = Vec4::INFINITY;
         // The shape found per lane as a float code: -1 none, i a sphere, spheres + i a quad
-        // (exact in f32 for any scene that fits in memory's shape counts here).
+        // (integers are exact in f32 up to 2^24 shapes, far beyond these scenes).
         let mut code = Vec4::splat(-1.0);
         let mut at = 0.0f32;
         for s in &geo.spheres {
