@@ -6,10 +6,11 @@ use glam::Vec3A;
 use rayon::prelude::*;
 
 use super::film::Image;
-use super::geometry::Surface;
+use super::geometry::{Prim, Surface};
 use super::lanes::QuadLanes;
 use super::last_segment::LastHit;
 use super::material::{sample_cosine, scatter_dielectric, Material};
+use super::path_lanes::RayPack;
 use super::rng::Sampler;
 use super::Scene;
 
@@ -42,8 +43,9 @@ impl Settings {
 
 /// Camera paths of a pixel traced together, taking turns segment by segment: each path is a
 /// long chain of dependent square roots and divisions, and independent chains side by side
-/// let the CPU overlap their latencies.
-const IN_FLIGHT: u32 = 4;
+/// let the CPU overlap their latencies; their rays meet the spheres and quads four paths at
+/// once ([`RayPack`]), two packs a turn.
+const IN_FLIGHT: u32 = 8;
 
 /// Renders `scene`: a pure function of (scene, settings). Rows run in parallel with rayon,
 /// but each sample's random numbers come from (seed, pixel, sample) alone and each pixel sums
@@ -183,7 +185,7 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
     }
 
     /// Row `y` of the image into `row` (RGB per pixel): each pixel's samples traced
-    /// `IN_FLIGHT` at a time, the rest one by one. Returns the rays cast (0 unless `COUNT`).
+    /// `IN_FLIGHT` at a time, then four, the rest one by one. Returns the rays cast (0 unless `COUNT`).
     #[inline(always)]
     fn row(&self, y: u32, row: &mut [f32]) -> u64 {
         let spp = self.settings.spp.max(1);
@@ -206,6 +208,13 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
                     add(l);
                 }
                 s += IN_FLIGHT;
+            }
+            if s + 4 <= spp {
+                let paths = std::array::from_fn(|k| self.camera_path(x, y, s + k as u32));
+                for l in self.trace_many::<4>(paths) {
+                    add(l);
+                }
+                s += 4;
             }
             for s in s..spp {
                 add(self.trace(self.camera_path(x, y, s)));
@@ -237,13 +246,26 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
         (path.radiance, path.rays)
     }
 
-    /// Radiance of `N` camera samples, their paths advanced in turn, a segment each (each
-    /// exactly as [`Tracer::trace`] would: the paths share nothing, so the bits are the same).
+    /// Radiance of `N` camera samples (a multiple of four), their paths advanced in turn, a
+    /// segment each (each exactly as [`Tracer::trace`] would: the paths share nothing, so the
+    /// bits are the same). Each turn their rays' spheres and quads are tested four paths at
+    /// once ([`RayPack`]), the same answers as one by one; finished paths' lanes idle.
     #[inline(always)]
     fn trace_many<const N: usize>(&self, mut paths: [Path; N]) -> [(Vec3A, u32); N] {
+        let geo = &self.scene.geometry;
         while paths.iter().any(|p| !p.done) {
-            for path in paths.iter_mut().filter(|p| !p.done) {
-                self.segment(path);
+            for four in paths.chunks_exact_mut(4) {
+                if four.iter().all(|p| p.done) {
+                    continue;
+                }
+                let o = std::array::from_fn(|k| four[k].o);
+                let d = std::array::from_fn(|k| four[k].d);
+                let shapes = RayPack::new(o, d).nearest_shape(geo);
+                for (path, shape) in four.iter_mut().zip(shapes) {
+                    if !path.done {
+                        self.segment_after(path, shape);
+                    }
+                }
             }
         }
         paths.map(|p| (p.radiance, p.rays))
@@ -253,6 +275,14 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
     /// (with next-event estimation) or the end of the path (`path.done`).
     #[inline(always)]
     fn segment(&self, path: &mut Path) {
+        let shape = (self.scene.geometry).nearest_shape(self.lanes, path.o, path.d, f32::INFINITY);
+        self.segment_after(path, shape);
+    }
+
+    /// [`Tracer::segment`] given the closest sphere or quad on the path's ray, `shape`, as
+    /// `Geometry::nearest_shape` finds it with an infinite range.
+    #[inline(always)]
+    fn segment_after(&self, path: &mut Path, shape: (f32, Option<Prim>)) {
         let (scene, s) = (self.scene, self.settings);
         let geo = &scene.geometry;
         if COUNT {
@@ -260,7 +290,7 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
         }
         if path.segments >= s.max_depth {
             // Only an emitter or a miss can still add light: no closest hit needed.
-            match geo.last_hit(self.lanes, path.o, path.d) {
+            match geo.last_hit_after(shape, path.o, path.d) {
                 LastHit::Miss => self.add_environment(path),
                 LastHit::Emitter { t, quad } => {
                     let q = &geo.quads[quad as usize];
@@ -271,7 +301,7 @@ impl<'a, const COUNT: bool> Tracer<'a, COUNT> {
             path.done = true;
             return;
         }
-        let Some((_, hit)) = geo.intersect_in(self.lanes, path.o, path.d, f32::INFINITY) else {
+        let Some((_, hit)) = geo.intersect_after(shape, path.o, path.d) else {
             self.add_environment(path);
             path.done = true;
             return;

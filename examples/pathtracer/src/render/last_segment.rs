@@ -14,7 +14,6 @@
 use glam::Vec3A;
 
 use super::geometry::{Geometry, Prim};
-use super::lanes::QuadLanes;
 
 /// What a path's last ray finds, as far as light is concerned.
 #[derive(Clone, Copy, Debug)]
@@ -34,10 +33,11 @@ pub(crate) enum LastHit {
 
 impl Geometry {
     /// What the ray `o + t d`, `t` in (0, infinity), finds first, as
-    /// [`Geometry::intersect_in`] would (`lanes` as there), reduced to whether it is light.
+    /// [`Geometry::intersect_in`] would, reduced to whether it is light; `shape` is the closest
+    /// sphere or quad on the ray as [`Geometry::nearest_shape`] finds it with an infinite range.
     #[inline(always)]
-    pub(crate) fn last_hit(&self, lanes: Option<&[QuadLanes]>, o: Vec3A, d: Vec3A) -> LastHit {
-        match self.nearest_shape(lanes, o, d, f32::INFINITY) {
+    pub(crate) fn last_hit_after(&self, shape: (f32, Option<Prim>), o: Vec3A, d: Vec3A) -> LastHit {
+        match shape {
             (_, None) => {
                 if self.rest_occluded(o, d, f32::INFINITY) {
                     LastHit::Dark

@@ -13,6 +13,7 @@ pub mod light;
 pub mod material;
 mod packed;
 mod pairs;
+mod path_lanes;
 pub mod rng;
 mod tri_lanes;
 mod wide;

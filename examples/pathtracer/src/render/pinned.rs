@@ -37,3 +37,28 @@ fn task_images_are_those_of_the_renderer_before_the_speed_work() {
         assert_eq!(fnv1a(&image.data), hash, "{name}: the image changed");
     }
 }
+
+/// As above with 13 samples per pixel: eight paths traced together, then four, then one alone
+/// (every task's default spp is a multiple of four). The hashes are those of the renderer
+/// before the paths' rays were tested in lanes (`--target --scale 0.5 --spp 13 --seed 7`).
+#[test]
+fn task_images_with_paths_in_flight_together_are_pinned() {
+    let expected = [
+        ("cup", 0xc49d_8f1f_6c1c_3fb4),
+        ("shadow", 0x27ed_82cd_245e_58a5),
+        ("occlusion", 0x3430_ce41_2ae6_68e4),
+        ("gi", 0x7403_fb37_89f0_f6aa),
+        ("sort", 0xe20e_4206_e0fb_65fb),
+        ("caustic", 0xf20d_632a_6612_7d08),
+        ("texture", 0x9ea0_e6e1_ac47_e442),
+    ];
+    let view = View {
+        scale: Some(0.5),
+        ..View::default()
+    };
+    for (task, (name, hash)) in tasks::all().into_iter().zip(expected) {
+        assert_eq!(task.name(), name);
+        let image = task.render(&task.target(), 7, 13, view);
+        assert_eq!(fnv1a(&image.data), hash, "{name}: the image changed");
+    }
+}

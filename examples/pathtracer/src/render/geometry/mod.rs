@@ -47,8 +47,8 @@ pub struct Surface {
 }
 
 /// A shape found by a ray: its kind and index (a mesh's: instance, triangle).
-#[derive(Clone, Copy)]
-pub(super) enum Prim {
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Prim {
     Sphere(u32),
     Quad(u32),
     Box(u32),
@@ -88,8 +88,19 @@ impl Geometry {
         d: Vec3A,
         tmax: f32,
     ) -> Option<(f32, Surface)> {
-        let (best, prim) = self.nearest_shape(lanes, o, d, tmax);
-        let (best, prim) = self.nearest_rest(o, d, best, prim);
+        self.intersect_after(self.nearest_shape(lanes, o, d, tmax), o, d)
+    }
+
+    /// [`Geometry::intersect_in`] given its first part, `shape`: the closest sphere or quad and
+    /// its distance as [`Geometry::nearest_shape`] finds them (or the range's end and None).
+    #[inline(always)]
+    pub(crate) fn intersect_after(
+        &self,
+        shape: (f32, Option<Prim>),
+        o: Vec3A,
+        d: Vec3A,
+    ) -> Option<(f32, Surface)> {
+        let (best, prim) = self.nearest_rest(o, d, shape.0, shape.1);
         let prim = prim?;
         let p = o + best * d;
         let mut surface = Surface {
