@@ -44,7 +44,7 @@ pub enum Error {
     },
 
     /// The estimator was asked for zero evaluations of `f`.
-    #[error("the number of samples (evaluations of f per estimate) must be at least 1, got 0")]
+    #[error("samples = 0 is invalid: must be at least 1 (evaluations of f per estimate)")]
     ZeroSamples,
 
     /// Antithetic pairs evaluate `f` twice per draw, so the count must be even.

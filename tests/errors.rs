@@ -478,7 +478,15 @@ fn messages_show_values_as_written() {
             .run(&[1.0])
             .unwrap_err()
         ),
-        "polish = 1.0 is invalid: must be a fraction of the budget in [0, 1)"
+        "polish = 1.0 is invalid: must be a fraction of the budget in [0, 1): the share the adaptive search gets after the paper's loop"
+    );
+    assert_eq!(
+        message(m().stop_when_stalled(0.0).run(&[1.0]).unwrap_err()),
+        "stop_when_stalled = 0.0 is invalid: must be a fraction of the budget in (0, 1]: the window over which the best value must improve (STALL_WINDOW = 0.2 is the tested choice)"
+    );
+    assert_eq!(
+        Error::ZeroSamples.to_string(),
+        "samples = 0 is invalid: must be at least 1 (evaluations of f per estimate)"
     );
     assert_eq!(
         message(FiniteDifference::new(f, f64::INFINITY).unwrap_err()),

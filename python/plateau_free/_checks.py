@@ -1,7 +1,9 @@
 """The checks of single option values for :mod:`plateau_free._options`: each takes the option's
 name and its value as given, returns the value in the form the run uses, and raises an
-:class:`OptionTypeError` for a value of the wrong type or a ValueError for one out of range,
-naming the option and showing its value as written. Also ``x0`` and the bounds."""
+:class:`OptionTypeError` for a value of the wrong type, naming the option and showing its value
+as written. The range of an option the library has is the library's check (:func:`_number`,
+:func:`_count`); here, a ValueError for a value out of range of an option that Python alone has
+(``workers``, ``checkpoint_every``, ...). Also ``x0`` and the bounds."""
 
 from __future__ import annotations
 
@@ -40,10 +42,14 @@ def _is_real(value: Any) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not _is_bool(value)
 
 
-def _whole(name: str, value: Any, lowest: int, highest: int = _USIZE_MAX, what: str = "") -> int:
+def _whole(name: str, value: Any, lowest: int, highest: int = _USIZE_MAX, what: str = "",
+           must: str = "") -> int:  # fmt: skip
     """``value`` as an int in ``[lowest, highest]``: an int (numpy's included) or a float with a
-    whole value (``1e4``); OptionTypeError for a non-number, ValueError for another number."""
-    must = f"{name} = {_show(value)} must be a whole number{what} from {lowest} to {_limit(highest)}"
+    whole value (``1e4``); OptionTypeError for a non-number, ValueError for another number
+    (``must``: the message, default the range)."""
+    must = f"{name} = {_show(value)} " + (
+        must or f"must be a whole number{what} from {lowest} to {_limit(highest)}"
+    )
     if not _is_real(value):
         raise OptionTypeError(must)
     if isinstance(value, (float, np.floating)):
@@ -64,47 +70,22 @@ def _as_float(value: Any, must: str) -> float:
         raise ValueError(f"{must}: it is too large for a float") from e
 
 
+def _number(name: str, value: Any) -> float:
+    """A real number option of the library (its range is the library's check): a float, or
+    OptionTypeError."""
+    must = f"{name} = {_show(value)} must be a number"
+    if not _is_real(value):
+        raise OptionTypeError(must)
+    return _as_float(value, must)
+
+
 def _positive(name: str, value: Any) -> float:
+    """A spread of the Python adapters, which check it before the library sees it."""
     must = f"{name} = {_show(value)} must be a finite number > 0"
     if not _is_real(value):
         raise OptionTypeError(must)
     number = _as_float(value, must)
     if not (math.isfinite(number) and number > 0):
-        raise ValueError(must)
-    return number
-
-
-def _fraction(name: str, value: Any) -> float:
-    must = (
-        f"{name} = {_show(value)} must be a fraction of the budget in [0, 1) "
-        "(the share the adaptive search gets after the paper's loop)"
-    )
-    if not _is_real(value):
-        raise OptionTypeError(must)
-    if not 0.0 <= value < 1.0:
-        raise ValueError(must)
-    return float(value)
-
-
-def _window(name: str, value: Any) -> float:
-    """``stop_when_stalled``: a fraction of the budget in ``(0, 1]`` (NaN fails the test)."""
-    must = (
-        f"{name} = {_show(value)} must be a fraction of the budget in (0, 1] (the window over "
-        "which the best value must improve; plateau_free.STALL_WINDOW = 0.2 is the tested choice)"
-    )
-    if not _is_real(value):
-        raise OptionTypeError(must)
-    if not 0.0 < value <= 1.0:
-        raise ValueError(must)
-    return float(value)
-
-
-def _not_nan(name: str, value: Any) -> float:
-    must = f"{name} = {_show(value)} must be a number (not NaN)"
-    if not _is_real(value):
-        raise OptionTypeError(must)
-    number = _as_float(value, must)
-    if math.isnan(number):
         raise ValueError(must)
     return number
 
@@ -157,7 +138,15 @@ def _annealer(name: str, value: Any) -> Union[str, Annealer]:
 
 
 def _counter(lowest: int, what: str = "") -> Callable[[str, Any], int]:
+    """A count that Python alone takes (its range is checked here)."""
     return lambda name, value: _whole(name, value, lowest, what=what)
+
+
+def _count(what: str = "") -> Callable[[str, Any], int]:
+    """A count option of the library: a whole number the Rust side can take (a usize); its
+    range is the library's check."""
+    must = f"must be a whole number{what}, not negative and at most {_USIZE_MAX}"
+    return lambda name, value: _whole(name, value, 0, what=what, must=must)
 
 
 def _start(x0: Any) -> np.ndarray:
@@ -245,8 +234,6 @@ def _box(bounds: Any, x0: np.ndarray, given: Any) -> tuple[list[float], list[flo
     return [p[0] for p in pairs], [p[1] for p in pairs]
 
 
-
-
 def _seed(name: str, value: Any) -> int:
     """A seed from 0 to 2**64 - 1; None: fresh entropy from the operating system (the seed
     drawn is the one the result records)."""
@@ -256,18 +243,18 @@ def _seed(name: str, value: Any) -> int:
 
 
 def _spread(name: str, value: Any) -> Union[float, list[float]]:
-    """``sigma0``: a finite number > 0, or a sequence of them (one per coordinate of ``x0``:
-    the caller checks the length)."""
+    """``sigma0``: a number, or a sequence of them (one per coordinate of ``x0``: the caller
+    checks the length; the library checks each is finite and > 0)."""
     if isinstance(value, (str, bytes)) or value is None or np.ndim(value) == 0:
-        return _positive(name, value)
-    must = f"{name} = {_show(value)} must be a finite number > 0, or one per coordinate of x0"
+        return _number(name, value)
+    must = f"{name} = {_show(value)} must be a number, or one per coordinate of x0"
     try:
-        array = np.asarray(value, dtype=np.float64).ravel()
+        array = np.asarray(value)
+        if array.dtype.kind not in "iuf":
+            raise TypeError(f"its elements are of dtype {array.dtype}")
+        spreads: list[float] = np.asarray(array, dtype=np.float64).ravel().tolist()
     except (TypeError, ValueError, OverflowError) as e:
         raise OptionTypeError(f"{must}: {e}") from e
-    if array.size == 0 or not bool(np.all(np.isfinite(array) & (array > 0))):
-        raise ValueError(must)
-    spreads: list[float] = array.tolist()
     return spreads
 
 

@@ -13,7 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _native
-from ._checks import _box, _counter, _flag, _not_nan, _positive, _show, _start
+from ._checks import _box, _count, _flag, _number, _show, _start
 from ._drive import _fresh_error_if_all_failed, _Run
 from ._evaluate import _Evaluator
 from ._minimize import _Callback
@@ -41,13 +41,13 @@ def _acceptance(name: str, value: Any) -> str:
     return value
 
 
-# Its own options' checks (the ranges of damping and max_step are the Rust side's).
+# Its own options' types (their ranges are the library's checks).
 _OWN: dict[str, Callable[[str, Any], Any]] = {
-    "sigma0": _positive,
-    "pairs": _counter(1),
-    "memory": _counter(1),
-    "damping": _not_nan,
-    "max_step": _not_nan,
+    "sigma0": _number,
+    "pairs": _count(),
+    "memory": _count(),
+    "damping": _number,
+    "max_step": _number,
     "acceptance": _acceptance,
     "smoothed_residuals": _flag,
 }
@@ -269,6 +269,7 @@ def least_squares(
                  on_failure=on_failure, workers=workers, disp=disp, callback=callback, checkpoint=checkpoint,
                  checkpoint_every=checkpoint_every, keep_history=keep_history)  # fmt: skip
     x, checked = _checked(x0, given)
+    _native_run(x, checked, 1, None)  # the library's checks of the options, before any evaluation
     evaluate = _Evaluator(
         fun, args=checked.get("args", ()), workers=checked.get("workers", 1),
         on_failure=checked["on_failure"], outputs=0,
@@ -284,13 +285,7 @@ def least_squares(
         setattr(e, "result", _at_start(x, checked, evaluate, "raised", e))
         raise
     try:
-        raw = _native._LeastSquares(
-            x.tolist(), r0.size, _pairs(sparsity, r0.size, x.size), checked.get("budget", 1000),
-            checked.get("sigma0", 0.1), checked.get("pairs", 8), checked.get("memory", 8),
-            checked.get("damping", 1e-3), checked.get("max_step", 1.0), checked.get("acceptance", "descent"),
-            checked.get("smoothed_residuals", False), checked.get("bounds"), checked["seed"],
-            checked["on_failure"],
-        )  # fmt: skip
+        raw = _native_run(x, checked, r0.size, _pairs(sparsity, r0.size, x.size))
     except BaseException:
         evaluate.close()
         raise
@@ -302,6 +297,18 @@ def least_squares(
         setattr(e, "result", _at_start(x, checked, evaluate, "raised", e))
         raise
     return _run(fun, x, checked, raw, evaluate, r0.size)
+
+
+def _native_run(x: np.ndarray, checked: dict[str, Any], outputs: int, pairs: Any) -> Any:
+    """The Rust run from ``x`` for ``outputs`` outputs (``pairs``: the sparsity pattern's
+    ``(output, parameter)`` pairs, None for dense), its options checked by the library."""
+    return _native._LeastSquares(
+        x.tolist(), outputs, pairs, checked.get("budget", 1000),
+        checked.get("sigma0", 0.1), checked.get("pairs", 8), checked.get("memory", 8),
+        checked.get("damping", 1e-3), checked.get("max_step", 1.0), checked.get("acceptance", "descent"),
+        checked.get("smoothed_residuals", False), checked.get("bounds"), checked["seed"],
+        checked["on_failure"],
+    )  # fmt: skip
 
 
 def _run(fun: Any, x: np.ndarray, checked: dict[str, Any], raw: Any, evaluate: _Evaluator, m: int) -> OptimizeResult:

@@ -1,8 +1,14 @@
 """The options of :func:`plateau_free.minimize` and :func:`plateau_free.ask_tell`, declared once:
 :data:`_OPTIONS` holds each option's check, the methods that take it, whether :func:`ask_tell`
 takes it too, and its documentation (both functions' docstrings are made from it);
-:class:`Options` holds its type. Adding an option is a row in each (and, for an option of the
-Rust ``Minimizer``, a field in ``python/src/convert.rs``'s ``AdaptiveOptions``).
+:class:`Options` holds its type. A row's check converts the value to what the run takes and
+raises :class:`OptionTypeError` for a wrong type; the ranges of the library's options are
+the library's checks (``Options::check`` and the builders), made when the run is built,
+before any evaluation, their errors naming the Python keyword (``python/src/objective.rs``'s
+``value_error``). Only the options the library does not have (``workers``, ``checkpoint``,
+...) have their ranges checked here. Adding an option of the adaptive search is a row in
+:data:`_OPTIONS`, a key in :class:`Options` and in :func:`_adaptive_options`, and a field in
+``python/src/convert.rs``'s ``AdaptiveOptions``: two files.
 
 Here too: the check of a whole call (the method, the options it takes, ``x0``, the bounds,
 the combinations), and the options in the forms the runs take."""
@@ -25,20 +31,18 @@ from ._checks import (
     _arguments,
     _box,
     _callable,
+    _count,
     _counter,
     _flag,
-    _fraction,
-    _not_nan,
+    _number,
     _path,
     _policy,
-    _positive,
     _sampling,
     _seed,
     _show,
     _spread,
     _start,
     _whole,
-    _window,
     _workers,
 )
 from ._native import DEFAULT_POLISH as _DEFAULT_POLISH
@@ -51,7 +55,7 @@ if TYPE_CHECKING:
 
 class Options(TypedDict, total=False):
     """The types of the options of :func:`minimize` and :func:`ask_tell` (documented in
-    :data:`_OPTIONS`, the one place that checks them)."""
+    :data:`_OPTIONS`, which checks their types)."""
 
     budget: Optional[int]
     seed: Optional[int]
@@ -112,7 +116,7 @@ def _row(check: Callable[[str, Any], Any], methods: frozenset[str], kind: str, d
 
 
 _OPTIONS: dict[str, _Option] = {
-    "budget": _row(_counter(1, " of evaluations"), _ALL, "int, optional", """
+    "budget": _row(_count(" of evaluations"), _ALL, "int, optional", """
         The most evaluations of ``fun`` the run spends, its final evaluation included:
         ``nfev <= budget`` always. Adaptive: default ``1000 * x0.size``. Polished: required.
         The paper's loop: when ``iterations`` is not given, as many iterations as the budget
@@ -200,24 +204,24 @@ _OPTIONS: dict[str, _Option] = {
         length has bounded memory): the paper's loop, the last ones; adaptive and polished,
         between ``keep_history`` and twice as many spread evenly over the run, the last
         iteration's last. ``history.dropped`` counts the others."""),
-    "target": _row(_not_nan, _SEARCH, "float, optional", """
+    "target": _row(_number, _SEARCH, "float, optional", """
         Adaptive, polished: stop as soon as ``fun`` reaches ``target`` or below."""),
-    "population": _row(_counter(2), _SEARCH, "int, optional", """
+    "population": _row(_count(), _SEARCH, "int, optional", """
         Adaptive, polished: the population of the first run (default ``4 + floor(3 ln n)``,
         at least 2); each restart doubles it."""),
     "restarts": _row(_flag, _SEARCH, "bool, optional", """
         Adaptive, polished: restart from the best point with a doubled population when a run
         converges or stalls while budget remains (default True)."""),
-    "patience": _row(_counter(0, " of restarts"), _SEARCH, "int, optional", """
+    "patience": _row(_count(" of restarts"), _SEARCH, "int, optional", """
         Adaptive, polished: how many restarts in a row must converge back at the best point
         seen before them for the run to be done before its budget (status 0, ``success``
         True, the message says so); default 1 (``Minimizer::patience``); 0: the budget, the
         target or the stall rule alone end the run."""),
-    "polish": _row(_fraction, frozenset({"polished"}), "float, optional", """
+    "polish": _row(_number, frozenset({"polished"}), "float, optional", """
         Polished: the fraction of ``budget``, in ``[0, 1)``, that the adaptive search gets
         after the paper's loop (default 0.5, as the Rust ``Minimizer`` and the path tracer;
         0: the loop alone, its best point returned)."""),
-    "stop_when_stalled": _row(_window, _SEARCH, "float, optional", """
+    "stop_when_stalled": _row(_number, _SEARCH, "float, optional", """
         Adaptive, polished: end the run once the best value has not improved over the last
         ``stop_when_stalled * budget`` evaluations, a fraction in ``(0, 1]``
         (:data:`STALL_WINDOW` is the tested choice); status 0 with a message saying it
@@ -225,9 +229,9 @@ _OPTIONS: dict[str, _Option] = {
     "iterations": _row(_counter(1), _LOOP, "int, optional", """
         The paper's loop: iterations to run; default the annealer's length if ``annealer``
         is an :class:`Annealer`, else as many as ``budget`` pays for, else 400."""),
-    "lr": _row(_positive, _LOOP | {"polished"}, "float, optional", """
+    "lr": _row(_number, _LOOP | {"polished"}, "float, optional", """
         Adam's learning rate (the paper's loop and polished; default 0.02)."""),
-    "samples": _row(_counter(1), frozenset({"plateau", "polished"}), "int, optional", """
+    "samples": _row(_count(), frozenset({"plateau", "polished"}), "int, optional", """
         Evaluations per gradient estimate, as for :class:`PlateauFreeGradient` (default 2;
         even with antithetic pairs)."""),
     "sampling": _row(_sampling, frozenset({"plateau"}), "str, optional", """
@@ -243,9 +247,9 @@ _OPTIONS: dict[str, _Option] = {
         The paper's loop: ``'paper'`` (default: sigma0 for half the run, then linear to
         ``sigma_min``), ``'constant'``, ``'exponential'``, ``'cosine'``, or an
         :class:`Annealer` (then ``sigma0`` and ``sigma_min`` are its own)."""),
-    "sigma_min": _row(_positive, frozenset({"plateau", "spsa"}), "float, optional", """
+    "sigma_min": _row(_number, frozenset({"plateau", "spsa"}), "float, optional", """
         The final spread of the decaying schedules (the paper's 0.01)."""),
-    "step": _row(_positive, frozenset({"fd"}), "float, optional", """
+    "step": _row(_number, frozenset({"fd"}), "float, optional", """
         ``'fd'`` alone: the finite difference's step (default 1e-3).""", ask_tell=False),
     "record_x": _row(_flag, _LOOP, "bool, optional", """
         The paper's loop: keep ``x`` after every iteration in ``history.x`` (default
@@ -416,8 +420,9 @@ def _check_call(
             "budget: method='polished' needs one (the paper's loop spends the first "
             "1 - polish of it, the adaptive search the rest)"
         )
-    if checked.get("population", 0) > checked.get("budget", 1000 * start.size):
-        # A generation is drawn whole (its points held in memory) before the budget cuts it.
+    if 0 < checked.get("budget", 1000 * start.size) < checked.get("population", 0):
+        # A generation is drawn whole (its points held in memory) before the budget cuts it;
+        # a budget of 0 is the library's error.
         budget = checked.get("budget")
         spelt = f"budget = {budget}" if budget is not None else f"the default budget, {1000 * start.size}"
         raise ValueError(

@@ -61,9 +61,25 @@ impl Shared {
     }
 }
 
+/// The library's error as a ValueError. The library checks the ranges of its options and
+/// names each by its Rust name: where Python's keyword differs, the message names the keyword.
 pub(crate) fn value_error(e: Error) -> PyErr {
+    if let Error::InvalidParameter {
+        name,
+        value,
+        reason,
+    } = &e
+    {
+        if let Some((_, python)) = PYTHON_NAMES.iter().find(|(rust, _)| rust == name) {
+            return PyValueError::new_err(format!("{python} = {value} is invalid: {reason}"));
+        }
+    }
     PyValueError::new_err(e.to_string())
 }
+
+/// `(Rust name, Python keyword)` of the library's options whose names differ: the one table of
+/// them. A sequence `sigma0` is `Minimizer::sigma0_each`; `integrality` sets `Minimizer::steps`.
+const PYTHON_NAMES: [(&str, &str); 2] = [("sigma0_each", "sigma0"), ("steps", "integrality")];
 
 /// A Python callable as a [`plateau_free::Objective`].
 pub(crate) struct PyObjective {

@@ -169,9 +169,9 @@ def test_bad_bounds():
 
 
 def test_bad_options():
-    with pytest.raises(ValueError, match="sigma0 = -1.0 must be a finite number > 0"):
+    with pytest.raises(ValueError, match="sigma0 = -1.0 is invalid: must be finite and > 0"):
         plateau_free.minimize(staircase, X0, budget=100, sigma0=-1.0, method="adaptive")
-    with pytest.raises(ValueError, match="population = 1 must be a whole number from 2"):
+    with pytest.raises(ValueError, match="population = 1 is invalid: must be at least 2"):
         plateau_free.minimize(staircase, X0, budget=100, population=1)
     with pytest.raises(
         ValueError,

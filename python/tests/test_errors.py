@@ -39,7 +39,7 @@ def test_bad_sigma(sigma):
 
 
 def test_bad_sigma0_in_minimize():
-    with pytest.raises(ValueError, match="sigma0 = -0.5 must be a finite number > 0"):
+    with pytest.raises(ValueError, match="sigma0 = -0.5 is invalid: must be finite and > 0"):
         plateau_free.minimize(linear, [0.0], method="plateau", sigma0=-0.5, iterations=2)
 
 

@@ -103,62 +103,62 @@ BAD = [
     (dict(seed=2**64), "seed = 18446744073709551616 must be a whole number"),
     (dict(seed="7"), "seed = '7' must be a whole number"),
     (dict(seed=True), "seed = True must be a whole number"),
-    (dict(budget=10**30), "budget = 1000000000000000000000000000000 must be a whole number of evaluations from 1"),
+    (dict(budget=10**30), "budget = 1000000000000000000000000000000 must be a whole number of evaluations, not negative and at most 18446744073709551615"),
     (dict(budget=np.nan), "budget = nan must be a whole number of evaluations"),
     (dict(budget=math.inf), "budget = inf must be a whole number of evaluations"),
     (dict(budget=1.5), "budget = 1.5 must be a whole number of evaluations"),
     (dict(budget="a"), "budget = 'a' must be a whole number of evaluations"),
     (dict(budget=True), "budget = True must be a whole number of evaluations"),
-    (dict(budget=0), "budget = 0 must be a whole number of evaluations from 1"),
-    (dict(budget=np.int64(-3)), "budget = -3 must be a whole number of evaluations from 1"),
+    (dict(budget=0), "budget = 0 is invalid: must be at least 1 evaluation"),
+    (dict(budget=np.int64(-3)), "budget = -3 must be a whole number of evaluations, not negative and at most 18446744073709551615"),
     (dict(bounds=[(1, 2, 3)] * 3), "bounds[0] = (1, 2, 3) must be a (lower, upper) pair of numbers or None"),
     (dict(bounds=[(0, "a")] * 3), "bounds[0] = (0, 'a') must be a (lower, upper) pair"),
     (dict(bounds=5), "bounds = 5 must be (lower, upper) pairs"),
     (dict(bounds=[(-1, 1)] * 2), "bounds has 2 (lower, upper) pairs, x0 has 3 coordinates"),
     (dict(bounds=[(-1, 1), (1, -1), (-1, 1)]), "bounds[1] = (1, -1): lower 1 > upper -1"),
     (dict(bounds=[(-1, 1), (-1, math.nan), (-1, 1)]), "bounds[1] = (-1, nan): NaN is not a bound"),
-    (dict(sigma0="a"), "sigma0 = 'a' must be a finite number > 0"),
-    (dict(sigma0=0), "sigma0 = 0 must be a finite number > 0"),
-    (dict(sigma0=-1), "sigma0 = -1 must be a finite number > 0"),
-    (dict(sigma0=np.float64(np.inf)), "sigma0 = inf must be a finite number > 0"),
-    (dict(target="low"), "target = 'low' must be a number (not NaN)"),
-    (dict(target=math.nan), "target = nan must be a number (not NaN)"),
-    (dict(population=1), "population = 1 must be a whole number from 2"),
-    (dict(population=4.5), "population = 4.5 must be a whole number from 2"),
+    (dict(sigma0="a"), "sigma0 = 'a' must be a number"),
+    (dict(sigma0=0), "sigma0 = 0.0 is invalid: must be finite and > 0"),
+    (dict(sigma0=-1), "sigma0 = -1.0 is invalid: must be finite and > 0"),
+    (dict(sigma0=np.float64(np.inf)), "sigma0 = inf is invalid: must be finite and > 0"),
+    (dict(target="low"), "target = 'low' must be a number"),
+    (dict(target=math.nan), "target = NaN is invalid: must not be NaN"),
+    (dict(population=1), "population = 1 is invalid: must be at least 2"),
+    (dict(population=4.5), "population = 4.5 must be a whole number, not negative and at most 18446744073709551615"),
     (dict(restarts="yes"), "restarts = 'yes' must be True or False"),
     (dict(on_failure="ignore"), "on_failure = 'ignore' is not a policy: use 'continue' or 'raise'"),
     (dict(on_failure=True), "on_failure = True is not a policy"),
     (dict(workers=0), "workers = 0 must be a whole number of threads from 1"),
     (dict(workers="many"), "workers = 'many' must be a number of threads"),
     (dict(batched=True, workers=2), "workers = 2: a batched fun evaluates its batch itself"),
-    (dict(sigma0=[1.0, 0.0, 1.0]), "sigma0 = [1.0, 0.0, 1.0] must be a finite number > 0, or one per coordinate"),
+    (dict(sigma0=[1.0, 0.0, 1.0]), "sigma0 = 0.0 is invalid: must be finite and > 0 (every coordinate's spread)"),
     (dict(sigma0=[1.0, 1.0]), "sigma0 has 2 spreads, x0 has 3 coordinates"),
     (dict(method="plateau", sigma0=[1.0, 1.0, 1.0]), "method='plateau' takes one number"),
-    (dict(patience=-1), "patience = -1 must be a whole number of restarts from 0"),
+    (dict(patience=-1), "patience = -1 must be a whole number of restarts, not negative and at most 18446744073709551615"),
     (dict(restarts=1), "restarts = 1 must be True or False"),
     (dict(batched=1), "batched = 1 must be True or False"),
     (dict(seeded=None), "seeded = None must be True or False"),
     (dict(callback=5), "callback = 5 must be callable"),
     (dict(method=3), "method = 3 is not a method: use 'adaptive', 'plateau', 'polished', 'fd' or 'spsa'"),
     (dict(method="newton"), "method = 'newton' is not a method of minimize"),
-    (dict(method="polished", budget=100, polish=1), "polish = 1 must be a fraction of the budget in [0, 1)"),
-    (dict(method="polished", budget=100, polish="a"), "polish = 'a' must be a fraction"),
-    (dict(stop_when_stalled=0), "stop_when_stalled = 0 must be a fraction of the budget in (0, 1]"),
-    (dict(stop_when_stalled=-0.2), "stop_when_stalled = -0.2 must be a fraction of the budget in (0, 1]"),
-    (dict(stop_when_stalled=1.5), "stop_when_stalled = 1.5 must be a fraction of the budget in (0, 1]"),
-    (dict(stop_when_stalled=math.nan), "stop_when_stalled = nan must be a fraction of the budget"),
-    (dict(stop_when_stalled=math.inf), "stop_when_stalled = inf must be a fraction of the budget"),
-    (dict(stop_when_stalled="0.2"), "stop_when_stalled = '0.2' must be a fraction of the budget"),
-    (dict(stop_when_stalled=True), "stop_when_stalled = True must be a fraction of the budget"),
+    (dict(method="polished", budget=100, polish=1), "polish = 1.0 is invalid: must be a fraction of the budget in [0, 1): the share"),
+    (dict(method="polished", budget=100, polish="a"), "polish = 'a' must be a number"),
+    (dict(stop_when_stalled=0), "stop_when_stalled = 0.0 is invalid: must be a fraction of the budget in (0, 1]: the window"),
+    (dict(stop_when_stalled=-0.2), "stop_when_stalled = -0.2 is invalid: must be a fraction of the budget in (0, 1]"),
+    (dict(stop_when_stalled=1.5), "stop_when_stalled = 1.5 is invalid: must be a fraction of the budget in (0, 1]"),
+    (dict(stop_when_stalled=math.nan), "stop_when_stalled = NaN is invalid: must be a fraction of the budget"),
+    (dict(stop_when_stalled=math.inf), "stop_when_stalled = inf is invalid: must be a fraction of the budget"),
+    (dict(stop_when_stalled="0.2"), "stop_when_stalled = '0.2' must be a number"),
+    (dict(stop_when_stalled=True), "stop_when_stalled = True must be a number"),
     (dict(method="polished", budget=100, stop_when_stalled=np.float64(2.0)),
-     "stop_when_stalled = 2.0 must be a fraction of the budget in (0, 1]"),
+     "stop_when_stalled = 2.0 is invalid: must be a fraction of the budget in (0, 1]"),
     (dict(method="polished", budget=100, samples=3), "samples = 3: antithetic pairs need an even number"),
     (dict(method="plateau", iterations=0), "iterations = 0 must be a whole number from 1"),
     (dict(method="plateau", iterations=2.5), "iterations = 2.5 must be a whole number from 1"),
-    (dict(method="plateau", lr="fast"), "lr = 'fast' must be a finite number > 0"),
-    (dict(method="plateau", lr=0), "lr = 0 must be a finite number > 0"),
+    (dict(method="plateau", lr="fast"), "lr = 'fast' must be a number"),
+    (dict(method="plateau", lr=0), "lr = 0.0 is invalid: must be finite and > 0"),
     (dict(method="plateau", samples=0), "samples = 0 must be a whole number from 1"),
-    (dict(method="plateau", samples="2"), "samples = '2' must be a whole number from 1"),
+    (dict(method="plateau", samples="2"), "samples = '2' must be a whole number, not negative"),
     (dict(method="plateau", samples=5), "samples = 5: antithetic pairs need an even number of samples"),
     (dict(method="plateau", sampling="spherical"), "sampling = 'spherical' is not a sampler"),
     (dict(method="plateau", sampling=2), "sampling = 2 is not a sampler"),
@@ -168,10 +168,10 @@ BAD = [
     (dict(method="plateau", final_evaluation=1), "final_evaluation = 1 must be True or False"),
     (dict(method="plateau", annealer="linear"), "annealer = 'linear' is not a schedule"),
     (dict(method="plateau", annealer=0.5), "annealer = 0.5 is not a schedule"),
-    (dict(method="plateau", sigma_min=-0.1), "sigma_min = -0.1 must be a finite number > 0"),
+    (dict(method="plateau", sigma_min=-0.1), "sigma_min = -0.1 is invalid: must be finite and > 0"),
     (dict(method="plateau", annealer=plateau_free.Annealer.cosine(0.3, 0.02, 25), sigma0=0.4),
      "sigma0 = 0.4: the Annealer given as annealer has its own (0.3)"),
-    (dict(method="fd", step=0), "step = 0 must be a finite number > 0"),
+    (dict(method="fd", step=0), "step = 0.0 is invalid: must be finite and > 0"),
     (dict(method="plateau", checkpoint=5), "checkpoint = 5 must be a path"),
     (dict(method="plateau", keep_history=0), "keep_history = 0 must be a whole number of iterations from 1"),
     (dict(method="plateau", checkpoint="c.json", checkpoint_every=-1), "checkpoint_every = -1 must be a whole number of iterations from 0"),
@@ -210,8 +210,8 @@ def test_errors_name_the_option_and_show_the_value(tmp_path, monkeypatch, option
         (dict(budget="a"), "budget = 'a' must be a whole number"),
         (dict(x0=None), "x0 = None must be an array of numbers"),
         (dict(method="fd"), "method = 'fd' is not a method of ask_tell"),
-        (dict(method="plateau", lr=-1), "lr = -1 must be a finite number > 0"),
-        (dict(stop_when_stalled=0), "stop_when_stalled = 0 must be a fraction of the budget in (0, 1]"),
+        (dict(method="plateau", lr=-1), "lr = -1.0 is invalid: must be finite and > 0"),
+        (dict(stop_when_stalled=0), "stop_when_stalled = 0.0 is invalid: must be a fraction of the budget in (0, 1]: the window"),
         (dict(bounds=[(1, 2, 3)] * 3), "bounds[0] = (1, 2, 3) must be a (lower, upper) pair"),
     ],
 )
@@ -267,3 +267,90 @@ def test_integral_floats_and_numpy_numbers_are_accepted_where_whole_numbers_are(
     a = plateau_free.minimize(staircase, X0, budget=300.0, seed=np.uint64(3), population=np.int32(6))
     b = plateau_free.minimize(staircase, X0, budget=300, seed=3, population=6)
     assert a.x.tobytes() == b.x.tobytes() and a.nfev == b.nfev
+
+
+# (method, options, the library's message): a value of the right type out of the range that
+# the library checks, one per range; `fun` must never be called.
+OUT_OF_RANGE = [
+    ("adaptive", dict(budget=0), "budget = 0 is invalid: must be at least 1 evaluation"),
+    ("adaptive", dict(sigma0=0.0), "sigma0 = 0.0 is invalid: must be finite and > 0"),
+    ("adaptive", dict(sigma0=[1.0, math.inf, 1.0]), "sigma0 = inf is invalid: must be finite and > 0 (every coordinate's spread)"),
+    ("adaptive", dict(target=np.float32("nan")), "target = NaN is invalid: must not be NaN"),
+    ("adaptive", dict(population=np.int64(1)), "population = 1 is invalid: must be at least 2"),
+    ("adaptive", dict(stop_when_stalled=0), "stop_when_stalled = 0.0 is invalid: must be a fraction of the budget in (0, 1]"),
+    ("adaptive", dict(x0=[0.5, 0.5, 0.5], integrality=[0, 1, 0], bounds=[(0.2, 0.8)] * 3),
+     "integrality = 1.0 is invalid: leaves no grid point k * step between a coordinate's bounds"),
+    ("polished", dict(budget=100, polish=-0.25), "polish = -0.25 is invalid: must be a fraction of the budget in [0, 1)"),
+    ("polished", dict(budget=100, samples=0), "samples = 0 is invalid: must be at least 1"),
+    ("polished", dict(budget=100, lr=math.inf), "lr = inf is invalid: must be finite and > 0"),
+    ("polished", dict(budget=100, sigma0=-2), "sigma0 = -2.0 is invalid: must be finite and > 0"),
+    ("polished", dict(budget=100, stop_when_stalled=1.01), "stop_when_stalled = 1.01 is invalid"),
+    ("plateau", dict(lr=-1e-3, iterations=3), "lr = -0.001 is invalid: must be finite and > 0"),
+    ("plateau", dict(sigma0=0, iterations=3), "sigma0 = 0.0 is invalid: must be finite and > 0"),
+    ("plateau", dict(sigma_min=math.nan, iterations=3), "sigma_min = NaN is invalid: must be finite and > 0"),
+    ("spsa", dict(sigma0=-0.5, iterations=3), "sigma0 = -0.5 is invalid: must be finite and > 0"),
+    ("spsa", dict(lr=0, iterations=3), "lr = 0.0 is invalid: must be finite and > 0"),
+    ("fd", dict(step=-1e-3, iterations=3), "step = -0.001 is invalid: must be finite and > 0"),
+    ("fd", dict(lr=math.nan, iterations=3), "lr = NaN is invalid: must be finite and > 0"),
+]
+
+
+@pytest.mark.parametrize("method, options, text", OUT_OF_RANGE, ids=[t for _, _, t in OUT_OF_RANGE])
+def test_the_library_checks_the_ranges_before_any_evaluation(method, options, text):
+    calls = []
+
+    def counted(x):
+        calls.append(x)
+        return staircase(x)
+
+    options = dict(options)
+    x0 = options.pop("x0", X0)
+    with pytest.raises(ValueError, match=re.escape(text)) as info:
+        plateau_free.minimize(counted, x0, method=method, **options)
+    assert not isinstance(info.value, TypeError)  # a number of the right type: a range error
+    assert calls == []
+    if method in ("adaptive", "polished", "plateau"):
+        with pytest.raises(ValueError, match=re.escape(text)):
+            plateau_free.ask_tell(x0, method=method, **options)
+
+
+@pytest.mark.parametrize(
+    "options, text",
+    [
+        (dict(budget=0), "budget = 0 is invalid: must be at least 1"),
+        (dict(sigma0=-1.0), "sigma0 = -1.0 is invalid: must be finite and > 0"),
+        (dict(pairs=0), "pairs = 0 is invalid: must be at least 1"),
+        (dict(memory=0), "memory = 0 is invalid: must be at least 1"),
+        (dict(damping=math.nan), "damping = NaN is invalid"),
+        (dict(max_step=0.0), "max_step = 0.0 is invalid"),
+    ],
+)
+def test_least_squares_ranges_are_the_library_s_before_any_evaluation(options, text):
+    calls = []
+
+    def residuals(x):
+        calls.append(x)
+        return np.asarray(x) - 1.0
+
+    with pytest.raises(ValueError, match=re.escape(text)):
+        plateau_free.least_squares(residuals, X0, **options)
+    assert calls == []
+
+
+@pytest.mark.parametrize(
+    "options, text",
+    [
+        (dict(budget=2**64), "budget = 18446744073709551616 must be a whole number of evaluations, not negative"),
+        (dict(population=-1), "population = -1 must be a whole number, not negative"),
+        (dict(target=10**400), "target = 1000"),
+        (dict(sigma0=[1.0, "a", 1.0]), "sigma0 = [1.0, 'a', 1.0] must be a number, or one per coordinate of x0"),
+        (dict(stop_when_stalled=np.bool_(True)), "stop_when_stalled = True must be a number"),
+    ],
+)
+def test_what_the_rust_side_cannot_take_is_refused_in_python(options, text):
+    # Too large for the Rust side's integer, negative for a count, too large for a float, or
+    # not a number: named by Python, never an OverflowError.
+    with pytest.raises(ValueError) as info:
+        plateau_free.minimize(staircase, X0, **options)
+    assert text in str(info.value)
+    assert not isinstance(info.value, OverflowError)

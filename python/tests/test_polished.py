@@ -117,9 +117,9 @@ def test_target_stops_the_run():
 
 @pytest.mark.parametrize("polish", [1.0, -0.1, math.nan, math.inf, True, "0.5"])
 def test_bad_polish(polish):
-    with pytest.raises(ValueError, match=r"polish = .* must be a fraction of the budget in \[0, 1\)"):
+    with pytest.raises(ValueError, match=r"polish = .* (is invalid: must be a fraction of the budget in \[0, 1\)|must be a number)"):
         plateau_free.minimize(cone_in_a_plateau, START, method="polished", budget=100, polish=polish)
-    with pytest.raises(ValueError, match=r"polish = .* must be a fraction"):
+    with pytest.raises(ValueError, match=r"polish = .* (is invalid: must be a fraction|must be a number)"):
         plateau_free.ask_tell(START, method="polished", budget=100, polish=polish)
 
 
@@ -158,15 +158,15 @@ def test_bad_loop_options():
         return plateau_free.minimize(cone_in_a_plateau, START, method="polished", budget=100, **options)
 
     for samples in (0, -2, 2.5, True):
-        with pytest.raises(ValueError, match=rf"samples = {samples!r} must be a whole number from 1 to 2\*\*64 - 1"):
+        with pytest.raises(ValueError, match=rf"samples = {samples!r} (is invalid: must be at least 1|must be a whole number)"):
             run(samples=samples)
     with pytest.raises(ValueError, match="samples = 3: antithetic pairs need an even number of samples; use an even count$"):
         run(samples=3)
     for name in ("lr", "sigma0"):
         for value in (0.0, -1.0, math.nan, math.inf):
-            with pytest.raises(ValueError, match=f"{name} = {value!r} must be a finite number > 0"):
+            with pytest.raises(ValueError, match=f"{name} = {'NaN' if math.isnan(value) else repr(value)} is invalid: must be finite and > 0"):
                 run(**{name: value})
     with pytest.raises(ValueError, match=r"x0\[0\] = 1\.5 is outside bounds\[0\] = \(None, 1\.0\)"):
         run(bounds=[(None, 1.0), (-1.0, 1.0)])
-    with pytest.raises(ValueError, match="population = 1 must be a whole number from 2"):
+    with pytest.raises(ValueError, match="population = 1 is invalid: must be at least 2"):
         run(population=1)

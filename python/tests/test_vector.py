@@ -90,7 +90,7 @@ def test_every_point_lies_in_the_box():
         ({"budget": 2.5}, "budget = 2.5"),
         ({"pairs": True}, "pairs = True"),
         ({"sigma0": 0.0}, "sigma0 = 0.0"),
-        ({"sigma0": float("nan")}, "sigma0 = nan"),
+        ({"sigma0": float("nan")}, "sigma0 = NaN is invalid"),
         ({"damping": -1.0}, "damping = -1.0"),
         ({"acceptance": "maybe"}, "acceptance = 'maybe'"),
         ({"sparsity": [(0, 5)]}, "sparsity parameter = 5"),

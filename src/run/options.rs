@@ -233,8 +233,12 @@ impl Options {
         }
         if let Some(each) = &self.sigma0_each {
             check::len("sigma0_each", each.len(), n)?;
-            for &s in each {
-                check::positive("sigma0_each", s)?;
+            if let Some(&s) = each.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
+                return Err(Error::InvalidParameter {
+                    name: "sigma0_each",
+                    value: s.into(),
+                    reason: "must be finite and > 0 (every coordinate's spread)",
+                });
             }
             if self.sigma0.is_some() {
                 return Err(Error::InvalidParameter {
@@ -285,7 +289,7 @@ impl Options {
             return Err(Error::InvalidParameter {
                 name: "polish",
                 value: polish.into(),
-                reason: "must be a fraction of the budget in [0, 1)",
+                reason: "must be a fraction of the budget in [0, 1): the share the adaptive search gets after the paper's loop",
             });
         }
         if polish > 0.0 && self.strategy == Strategy::Adaptive {
