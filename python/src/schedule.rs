@@ -44,6 +44,9 @@ impl PyAnnealer {
             }
         };
         let sigma_min = if shape == Schedule::Constant {
+            // A constant schedule never reaches `sigma_min`; a bad value is still refused,
+            // by the library's check.
+            RsAnnealer::new(shape, sigma0, sigma_min, iterations).map_err(value_error)?;
             sigma0
         } else {
             sigma_min

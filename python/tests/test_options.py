@@ -288,6 +288,8 @@ OUT_OF_RANGE = [
     ("plateau", dict(lr=-1e-3, iterations=3), "lr = -0.001 is invalid: must be finite and > 0"),
     ("plateau", dict(sigma0=0, iterations=3), "sigma0 = 0.0 is invalid: must be finite and > 0"),
     ("plateau", dict(sigma_min=math.nan, iterations=3), "sigma_min = NaN is invalid: must be finite and > 0"),
+    ("plateau", dict(annealer="constant", sigma_min=-1.0, iterations=3),
+     "sigma_min = -1.0 is invalid: must be finite and > 0"),
     ("spsa", dict(sigma0=-0.5, iterations=3), "sigma0 = -0.5 is invalid: must be finite and > 0"),
     ("spsa", dict(lr=0, iterations=3), "lr = 0.0 is invalid: must be finite and > 0"),
     ("fd", dict(step=-1e-3, iterations=3), "step = -0.001 is invalid: must be finite and > 0"),
