@@ -25,12 +25,13 @@ pub struct QuadLanes {
 
 /// Lane-wise `a.x * b.x + a.y * b.y + a.z * b.z`, summed in glam's order for `Vec3A::dot`.
 #[inline(always)]
-fn dot(a: &[Vec4; 3], b: &[Vec4; 3]) -> Vec4 {
+pub(super) fn dot(a: &[Vec4; 3], b: &[Vec4; 3]) -> Vec4 {
     (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2]
 }
 
+/// `v` in every lane, by coordinate.
 #[inline(always)]
-fn splat(v: Vec3A) -> [Vec4; 3] {
+pub(super) fn splat(v: Vec3A) -> [Vec4; 3] {
     [Vec4::splat(v.x), Vec4::splat(v.y), Vec4::splat(v.z)]
 }
 

@@ -14,23 +14,13 @@
 use glam::{BVec4A, Vec3A, Vec4};
 
 use super::geometry::{Geometry, Prim, Quad, Sphere, T_MIN};
+use super::lanes::{dot, splat};
 
 /// Four rays by coordinate: lane `k` is ray `k`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RayPack {
     o: [Vec4; 3],
     d: [Vec4; 3],
-}
-
-/// Lane-wise `a.x * b.x + a.y * b.y + a.z * b.z`, summed in glam's order for `Vec3A::dot`.
-#[inline(always)]
-fn dot(a: &[Vec4; 3], b: &[Vec4; 3]) -> Vec4 {
-    (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2]
-}
-
-#[inline(always)]
-fn splat(v: Vec3A) -> [Vec4; 3] {
-    [Vec4::splat(v.x), Vec4::splat(v.y), Vec4::splat(v.z)]
 }
 
 /// `t > T_MIN && t < tmax`, lane-wise (false for a NaN).
