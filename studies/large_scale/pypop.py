@@ -109,13 +109,7 @@ def texture(arm: str, task: Texture, x0: Vector, budgets: list[int], seed: int, 
 
     t0 = time.perf_counter()
     evaluations, capped = run(arm, fun, x0, 0.25, max(budgets), seed, cap, 0.0, 1.0)
-    values = dict(rec.at)
-    for b in budgets:  # a run that stopped early keeps its best for the larger budgets
-        if b not in values and not capped:
-            values[b] = rec.best
-    if capped:
-        values.setdefault(max(budgets), rec.best)
-    return Outcome(values, rec.evaluations, time.perf_counter() - t0, capped)
+    return Outcome(rec.values(capped), rec.evaluations, time.perf_counter() - t0, capped)
 
 
 def bbob(arm: str, problem: object, budget: int, target: float, cap: float) -> tuple[int, bool]:

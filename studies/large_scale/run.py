@@ -153,6 +153,17 @@ class Recorder:
         self.best = min(self.best, float(values.min()))
         self.evaluations += int(values.size)
 
+    def values(self, capped: bool, fill: bool = True) -> dict[int, float]:
+        """The best value at each budget reached. With ``fill``, a run that stopped early keeps
+        its best for the larger budgets; a capped run shows its best at the largest."""
+        values = dict(self.at)
+        if fill and not capped:
+            for b in self.budgets:
+                values.setdefault(b, self.best)
+        if capped:
+            values.setdefault(max(self.budgets), self.best)
+        return values
+
 
 @dataclass
 class Outcome:
@@ -193,10 +204,7 @@ def run_minimize(
     seconds = time.perf_counter() - t0
     if not capped and not math.isclose(es.result.fun, rec.best, rel_tol=0, abs_tol=0):
         raise AssertionError(f"minimize returned {es.result.fun}, best evaluated {rec.best}")
-    values = dict(rec.at)
-    if capped:
-        values.setdefault(max(budgets), rec.best)
-    return Outcome(values, rec.evaluations, seconds, capped)
+    return Outcome(rec.values(capped, fill=False), rec.evaluations, seconds, capped)
 
 
 def run_paper(task: Texture, x0: Vector, budget: int, seed: int, cap: float) -> Outcome:
@@ -237,13 +245,7 @@ def run_sepcma(task: Texture, x0: Vector, budgets: list[int], seed: int, cap: fl
         v = task.loss(np.asarray(xs))
         rec.see(v)
         es.tell(xs, v.tolist())
-    values = dict(rec.at)
-    for b in budgets:  # a run that stopped early keeps its best for the larger budgets
-        if b not in values and not capped:
-            values[b] = rec.best
-    if capped:
-        values.setdefault(max(budgets), rec.best)
-    return Outcome(values, rec.evaluations, time.perf_counter() - t0, capped)
+    return Outcome(rec.values(capped), rec.evaluations, time.perf_counter() - t0, capped)
 
 
 def run_image(task: Texture, x0: Vector, budget: int, seed: int, cap: float) -> Outcome:
