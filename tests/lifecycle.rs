@@ -251,6 +251,19 @@ struct Walk {
     seeds: [u64; 1],
 }
 
+impl Walk {
+    /// At 0, for `iterations` iterations.
+    fn new(iterations: usize) -> Walk {
+        Walk {
+            x: vec![0.0],
+            iterations,
+            done: 0,
+            best: f64::INFINITY,
+            seeds: [0],
+        }
+    }
+}
+
 impl AskAndTell for Walk {
     type Output = f64;
     fn ask(&mut self) -> Result<Option<Ask<'_>>, Error> {
@@ -293,13 +306,7 @@ impl AskAndTell for Walk {
 fn the_trace_stays_bounded() {
     let keep = 100;
     let mut trace = Trace::new(keep);
-    let walk = Walk {
-        x: vec![0.0],
-        iterations: 100_000,
-        done: 0,
-        best: f64::INFINITY,
-        seeds: [0],
-    };
+    let walk = Walk::new(100_000);
     let best = Driver::new()
         .observe(&mut trace)
         .run(walk, |_, ask, out| {
@@ -613,13 +620,7 @@ mod checkpoints {
             failure.error
         );
         // A method with no saved form is refused before it begins.
-        let walk = Walk {
-            x: vec![0.0],
-            iterations: 10,
-            done: 0,
-            best: f64::INFINITY,
-            seeds: [0],
-        };
+        let walk = Walk::new(10);
         let failure = Driver::new()
             .checkpoint(Checkpoint::new(path.with_extension("walk")))
             .run(walk, |_, _, out| {
