@@ -32,7 +32,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from studies.coco.solvers import SOLVERS, Box, Done
+from studies.coco.solvers import SOLVERS, SUBSET_SOLVERS, Box, Done
 
 DEFAULT_RUNS = "docs/results/coco"
 _SUITES: dict[str, Any] = {}
@@ -196,7 +196,9 @@ def main() -> None:
     r.add_argument("--dims", type=ranges, default="5,10,20", help="e.g. 5,10,20,40")
     r.add_argument("--functions", type=ranges, default="1-24")
     r.add_argument("--instances", type=ranges, default="1-5")
-    r.add_argument("--solvers", type=solver_list, default=",".join(SOLVERS))
+    r.add_argument("--solvers", type=solver_list,
+                   default=",".join(s for s in SOLVERS if s not in SUBSET_SOLVERS),
+                   help=f"default: all but {', '.join(SUBSET_SOLVERS)} (run on a subset)")
     r.add_argument("--budget", type=positive, default=1000,
                    help="evaluations per dimension (default 1000)")
     r.add_argument("--jobs", type=positive, default=2, help="processes (default 2)")

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable
 
 from studies import _page
-from studies.coco.solvers import SOLVERS
+from studies.coco.solvers import SOLVERS, SUBSET_SOLVERS
 
 GROUPS = {"f1-14": range(1, 15), "f15-24": range(15, 25)}
 
@@ -94,19 +94,46 @@ from bbob's on some functions: f15 instance 1 is 100, not 1000).
 The peers get the box as `minimize` does and a starting spread of a fifth of the mean box
 width, scaled per coordinate by its width: pycma 4.5 `fmin2` with BIPOP restarts (9),
 with and without `integer_variables`; `cmaes` 0.12 `CMAwM` with the integer steps, restarted
-with a doubled population whenever it stops. On bbob there is nothing to declare: the rows
+with a doubled population whenever it stops; nevergrad 1.0.12's NGOpt (its algorithm
+selector) with the box as its bounds and the integer variables cast to integers, on a subset
+(`run --solvers ngopt --dims 5,10 --instances 1`, its own section at the end). On bbob there is nothing to declare: the rows
 with integers are the box's and are not run. `minimize` is given the budget and the target
 (`target=f_opt + 1e-8`); the peers are stopped by the counter that counts every run's
 evaluations alike.
 """
 
 
+def subset_section(solver: str, runs: list[dict[str, Any]]) -> list[str]:
+    """Every solver on exactly the problems ``solver`` ran (a subset of the grid)."""
+    key = lambda r: (r["suite"], r["f"], r["n"], r["instance"])  # noqa: E731
+    ran = {key(r) for r in runs if r["solver"] == solver}
+    if not ran:
+        return []
+    lines = ["", f"## {SOLVERS[solver][1]}, on a subset", "",
+             "Too slow for the whole grid, it ran the problems below; every solver is scored "
+             "here on exactly those problems, so the cells compare like with like (they differ "
+             "from the tables above, which average over more instances)."]
+    for name in ("bbob-mixint", "bbob"):
+        mine = [r for r in runs if r["suite"] == name and key(r) in ran]
+        if mine:
+            dims = sorted({r["n"] for r in mine})
+            instances = spans(sorted({r["instance"] for r in mine}))
+            lines += ["", f"{name}, functions 1-24, instances {instances}:", ""]
+            cols = [(f"n = {n}", lambda r, n=n: r["n"] == n) for n in dims]
+            cols += [(g, lambda r, fids=fids: r["f"] in fids) for g, fids in GROUPS.items()]
+            lines += table(mine, [*cols, ("all", lambda r: True)])
+    return lines
+
+
 def write_page(runs_dir: Path, page: Path) -> None:
     runs = [json.loads(line) for line in (runs_dir / "runs.jsonl").read_text().splitlines()]
+    grid = [r for r in runs if r["solver"] not in SUBSET_SOLVERS]
     lines = INTRO.splitlines()
     for name in ("bbob-mixint", "bbob"):
-        mine = [r for r in runs if r["suite"] == name]
+        mine = [r for r in grid if r["suite"] == name]
         if mine:
             lines += ["", *suite_section(name, mine)]
+    for solver in SUBSET_SOLVERS:
+        lines += subset_section(solver, runs)
     _page.write(page, lines, runs=runs_dir)
     print(page)

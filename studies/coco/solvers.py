@@ -119,6 +119,37 @@ def cmawm(f: Callable, box: Box) -> None:
         popsize *= 2
 
 
+def ngopt(f: Callable, box: Box) -> None:
+    """nevergrad's NGOpt with the box (its bounds, ``set_bounds``) and, on bbob-mixint, the
+    integer variables cast to integers (``set_integer_casting``): nevergrad's way of declaring
+    them, so NGOpt's selector sees a discrete part; its defaults otherwise."""
+    import warnings
+
+    import nevergrad as ng
+
+    flags = np.array(box.flags, dtype=bool)
+    x = box.x0.copy()
+    with warnings.catch_warnings():  # nevergrad's warnings on its bounds and its own choices
+        warnings.simplefilter("ignore")
+        parts = {}
+        if (~flags).any():
+            parts["real"] = ng.p.Array(init=box.x0[~flags].copy()).set_bounds(
+                box.lower[~flags], box.upper[~flags])
+        if flags.any():
+            parts["int"] = ng.p.Array(init=box.x0[flags].copy()).set_bounds(
+                box.lower[flags], box.upper[flags]).set_integer_casting()
+        param = ng.p.Dict(**parts)
+        param.random_state = np.random.RandomState(box.seed)
+        opt = ng.optimizers.NGOpt(parametrization=param, budget=box.budget, num_workers=1)
+        while True:
+            candidate = opt.ask()
+            if "real" in parts:
+                x[~flags] = candidate.value["real"]
+            if "int" in parts:
+                x[flags] = candidate.value["int"]
+            opt.tell(candidate, f(x))
+
+
 def random_search(f: Callable, box: Box) -> None:
     """Uniform points in the box, integer variables rounded."""
     rng = np.random.default_rng(box.seed)
@@ -136,5 +167,9 @@ SOLVERS: dict[str, tuple[Callable[[Callable, Box], None], str]] = {
     "pycma-int": (pycma_int, "pycma BIPOP-CMA-ES, the box and `integer_variables`"),
     "pycma-box": (pycma_box, "pycma BIPOP-CMA-ES, the box"),
     "cmawm": (cmawm, "`cmaes.CMAwM` (CMA-ES with margin), IPOP restarts"),
+    "ngopt": (ngopt, "nevergrad 1.0.12's NGOpt, the box and the integers cast"),
     "random": (random_search, "random search in the box"),
 }
+# Solvers too slow for the whole grid: run on a subset (``--solvers ngopt --dims 5,10
+# --instances 1``), and compared on the page only on the problems they ran.
+SUBSET_SOLVERS = ("ngopt",)
