@@ -205,3 +205,69 @@ fn a_saved_run_with_steps_goes_on_bit_for_bit() {
         recorded(&m, mixed, &[1.0, 1.0, 1.0]).0
     );
 }
+
+/// A linear slope on integers whose minimiser is the box's corner `hi`, with one continuous
+/// coordinate: the search reaches the corner exactly (a clamped discrete coordinate stalled on
+/// a face before the others reached theirs), every point in the box and on the grid.
+#[test]
+fn an_integer_slope_reaches_the_box_corner() {
+    let n = 20;
+    let mut steps = vec![1.0; n];
+    steps[n - 1] = 0.0;
+    let (lo, hi) = (vec![-5.0; n], vec![5.0; n]);
+    let slope = |x: &[f64]| {
+        x.iter()
+            .enumerate()
+            .map(|(i, v)| -(1.0 + i as f64 / 4.0) * v)
+            .sum::<f64>()
+    };
+    for seed in 0..3 {
+        let m = Minimizer::without_objective()
+            .steps(steps.clone())
+            .bounds(lo.clone(), hi.clone())
+            .budget(2000 * n)
+            .target(slope(&hi))
+            .seed(seed);
+        let (best, seen) = recorded(&m, slope, &vec![0.0; n]);
+        assert_eq!(best.x, hi, "seed {seed}: {best:?}");
+        for x in &seen {
+            for i in 0..n {
+                assert!(
+                    on_grid(x[i], steps[i]) && lo[i] <= x[i] && x[i] <= hi[i],
+                    "{x:?}"
+                );
+            }
+        }
+    }
+}
+
+/// A bowl whose minimiser lies beyond the box on two integer coordinates: the result is on
+/// their faces and at the bowl's optimum elsewhere; the ask-and-tell run is the callback form.
+#[test]
+fn an_integer_bowl_with_its_minimiser_on_a_face() {
+    let target = [7.0, -9.0, 1.0, 0.4];
+    let bowl = |x: &[f64]| {
+        x.iter()
+            .zip(&target)
+            .map(|(v, t)| (v - t).powi(2))
+            .sum::<f64>()
+    };
+    let steps = vec![1.0, 1.0, 1.0, 0.0];
+    let (lo, hi) = (vec![-3.0; 4], vec![3.0; 4]);
+    let m = Minimizer::without_objective()
+        .steps(steps.clone())
+        .bounds(lo.clone(), hi.clone())
+        .budget(3000)
+        .seed(5);
+    let (best, _) = recorded(&m, bowl, &[0.0, 2.0, -2.0, 0.0]);
+    assert_eq!(&best.x[..3], &[3.0, -3.0, 1.0], "{best:?}");
+    assert!((best.x[3] - 0.4).abs() < 1e-4, "{best:?}");
+    let run = Minimizer::new(bowl)
+        .steps(steps)
+        .bounds(lo, hi)
+        .budget(3000)
+        .seed(5)
+        .run(&[0.0, 2.0, -2.0, 0.0])
+        .unwrap();
+    assert_eq!(best, run);
+}

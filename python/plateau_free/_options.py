@@ -140,7 +140,8 @@ _OPTIONS: dict[str, _Option] = {
         Box bounds: a sequence of ``(lower, upper)`` pairs, one per coordinate, one pair for
         all coordinates, or a ``scipy.optimize.Bounds``; ``None`` or an infinity leaves that
         side open (``(None, 2)``); ``x0`` must lie inside. Adaptive and polished: every
-        evaluated point is projected onto the box. The paper's loop: Adam projects after
+        evaluated point is projected onto the box (its integer coordinates folded into it:
+        docs/integers.md). The paper's loop: Adam projects after
         every step."""),
     "integrality": _row(lambda name, value: _integrality(name, value), frozenset({"adaptive"}),
                         "array of 0 and 1, optional", """

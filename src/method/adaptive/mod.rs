@@ -4,6 +4,7 @@
 //! target reached, or (without restarts) a run converges. [`crate::run::Strategy::Adaptive`] of
 //! [`crate::AskTell`], and the polish after the paper's loop (`../polished.rs`).
 
+mod fold;
 mod gaussian;
 mod repeats;
 
@@ -29,13 +30,14 @@ pub(crate) struct Adaptive {
     #[cfg_attr(feature = "serde", serde(default))]
     low_rank: bool,
     lambda: usize,
+    /// Where a run starts, in the search's space (the box's points unfolded: `fold.rs`).
     start: Vec<f64>,
     iterations: usize,
     restarts: usize,
     /// The run in progress; `None` when the next ask starts one.
     dist: Option<SearchGaussian>,
-    /// The asked generation's offsets (repaired onto the bounds), while its values are
-    /// awaited.
+    /// The asked generation's offsets (continuous coordinates repaired onto the bounds),
+    /// while its values are awaited.
     asked: Option<Vec<DVector<f64>>>,
     #[cfg_attr(feature = "serde", serde(with = "crate::saved::floats"))]
     points: Vec<f64>,
@@ -69,7 +71,7 @@ impl Adaptive {
             full,
             low_rank: o.metric == Metric::LowRank,
             lambda: o.population.unwrap_or_else(|| Params::default_lambda(n)),
-            start: x0.to_vec(),
+            start: fold::unfold_discrete(x0, o.bounds.as_ref(), o.steps.as_deref()),
             iterations: 0,
             restarts: 0,
             dist: None,
@@ -149,7 +151,8 @@ impl Adaptive {
         }
         if self.dist.is_none() {
             self.run_reference = Some(ledger.best.fun);
-            self.repeats.begin(&ledger.best.x);
+            let best = fold::unfold_discrete(&ledger.best.x, o.bounds.as_ref(), o.steps.as_deref());
+            self.repeats.begin(&best);
         }
         let dist = self.dist.get_or_insert_with(|| {
             let mut dist = SearchGaussian::new(
@@ -175,17 +178,14 @@ impl Adaptive {
         self.points.clear();
         for y in ys.iter_mut() {
             let mut x = dist.point(y);
-            if let Some((lo, hi)) = &o.bounds {
-                let mut moved = false;
-                for i in 0..n {
-                    let c = x[i].clamp(lo[i], hi[i]);
-                    moved |= c != x[i];
-                    x[i] = c;
-                }
-                if moved {
-                    // The offset of the point actually evaluated, for the update.
+            // Into the box (`fold.rs`): the update learns from the clamped continuous
+            // coordinates and from the discrete ones as drawn.
+            if let Some(bounds) = &o.bounds {
+                let steps = o.steps.as_deref();
+                if fold::clamp_continuous(x.as_mut_slice(), bounds, steps) {
                     *y = (&x - &dist.mean) / dist.sigma;
                 }
+                fold::fold_discrete(x.as_mut_slice(), bounds, steps);
             }
             // Discrete coordinates are rounded for the evaluation only: the update learns
             // from the continuous offset, so that the spread along such a coordinate is
@@ -269,7 +269,8 @@ impl Adaptive {
             self.restarts += 1;
             self.lambda *= 2;
             if o.restart_from_best {
-                self.start.clone_from(&ledger.best.x);
+                self.start =
+                    fold::unfold_discrete(&ledger.best.x, o.bounds.as_ref(), o.steps.as_deref());
             }
             self.dist = None;
         }
