@@ -9,6 +9,8 @@
 //! its tread. A folded one has no such bias, and the rounding onto the grid puts every folded
 //! value near a face exactly on the face's grid point.
 
+use crate::run::Options;
+
 /// The margin, in a coordinate's units, within which the map is quadratic: a twentieth of the
 /// box's width, or of `1 + |bound|` on a coordinate bounded on one side only.
 fn margin(lo: f64, hi: f64) -> f64 {
@@ -97,23 +99,22 @@ pub(super) fn clamp_continuous(
 
 /// The discrete coordinates of `x` folded into the box `(lo, hi)` ([`fold`]).
 pub(super) fn fold_discrete(x: &mut [f64], (lo, hi): &(Vec<f64>, Vec<f64>), steps: Option<&[f64]>) {
+    let Some(steps) = steps else {
+        return;
+    };
     for (i, v) in x.iter_mut().enumerate() {
-        if folded(steps, i) {
+        if steps[i] > 0.0 {
             *v = fold(*v, lo[i], hi[i]);
         }
     }
 }
 
 /// A point of the box in the search's space: its discrete coordinates unfolded ([`unfold`]).
-pub(super) fn unfold_discrete(
-    y: &[f64],
-    bounds: Option<&(Vec<f64>, Vec<f64>)>,
-    steps: Option<&[f64]>,
-) -> Vec<f64> {
+pub(super) fn unfold_discrete(y: &[f64], o: &Options) -> Vec<f64> {
     let mut x = y.to_vec();
-    if let Some((lo, hi)) = bounds {
+    if let (Some((lo, hi)), Some(steps)) = (&o.bounds, &o.steps) {
         for (i, v) in x.iter_mut().enumerate() {
-            if folded(steps, i) {
+            if steps[i] > 0.0 {
                 *v = unfold(*v, lo[i], hi[i]);
             }
         }

@@ -71,7 +71,7 @@ impl Adaptive {
             full,
             low_rank: o.metric == Metric::LowRank,
             lambda: o.population.unwrap_or_else(|| Params::default_lambda(n)),
-            start: fold::unfold_discrete(x0, o.bounds.as_ref(), o.steps.as_deref()),
+            start: fold::unfold_discrete(x0, o),
             iterations: 0,
             restarts: 0,
             dist: None,
@@ -151,7 +151,7 @@ impl Adaptive {
         }
         if self.dist.is_none() {
             self.run_reference = Some(ledger.best.fun);
-            let best = fold::unfold_discrete(&ledger.best.x, o.bounds.as_ref(), o.steps.as_deref());
+            let best = fold::unfold_discrete(&ledger.best.x, o);
             self.repeats.begin(&best);
         }
         let dist = self.dist.get_or_insert_with(|| {
@@ -269,8 +269,7 @@ impl Adaptive {
             self.restarts += 1;
             self.lambda *= 2;
             if o.restart_from_best {
-                self.start =
-                    fold::unfold_discrete(&ledger.best.x, o.bounds.as_ref(), o.steps.as_deref());
+                self.start = fold::unfold_discrete(&ledger.best.x, o);
             }
             self.dist = None;
         }
