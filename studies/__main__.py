@@ -29,6 +29,8 @@ STUDIES: dict[str, tuple[str, str]] = {
                       "every task on both renderers beside the paper (docs/results/mitsuba-tasks.md)"),
     "render-speed": ("studies.renderer.speed",
                      "our renderer's time per render against Mitsuba's (docs/results/render-speed.md)"),
+    "render-ab": ("studies.renderer.ab",
+                  "two pathtracer binaries' CPU seconds per render, task by task, interleaved"),
     "same-images": ("studies.renderer.same_images",
                     "whether two pathtracer binaries draw the same images, bit for bit"),
     "large-scale": ("studies.large_scale.run",

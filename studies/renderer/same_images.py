@@ -21,8 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-
-TASKS = ("cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture")
+from studies.renderer.binary import TASKS
 
 
 def render(binary: str, task: str, which: str, threads: int, out: Path) -> None:

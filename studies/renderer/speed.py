@@ -40,7 +40,6 @@ import os
 import platform
 import shlex
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -50,8 +49,8 @@ from typing import Any
 
 from studies.mitsuba import _export as mx
 from studies import _page
+from studies.renderer.binary import TASKS, render_report
 
-TASKS = ("cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture")
 GOAL = 0.5  # the goal: at most half Mitsuba's time per render
 # Seconds to wait before each renderer's turn, so that none starts while the one before still
 # keeps the cores busy (see the docstring).
@@ -67,12 +66,9 @@ WORK: dict[str, dict[str, Any]] = {}
 def ours_seconds(binary: str, task: str, threads: int, inner: int, workdir: Path) -> float:
     """Median of `inner` back-to-back renders of our renderer, as the binary reports it (and
     the render's paths and rays into `WORK[task]` when it reports them)."""
-    cmd = [binary, "render", task, "--target", "--repeat", str(inner), "--threads", str(threads),
-           "--out", str(workdir / f"{task}.exr")]
-    out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
-    fields = dict(line.split(":", 1) for line in out.splitlines() if ":" in line)
+    fields = render_report(binary, task, inner, threads, str(workdir / f"{task}.exr"))
     if "render_seconds" not in fields:
-        raise RuntimeError(f"{' '.join(cmd)}: no render_seconds in its output:\n{out}")
+        raise RuntimeError(f"{binary} render {task}: no render_seconds in its output: {fields}")
     if binary == os.environ.get("PATHTRACER") and all(
             k in fields for k in ("paths", "rays", "render_cpu_seconds")):
         work = WORK.setdefault(task, {"paths": int(fields["paths"]), "rays": int(fields["rays"]),

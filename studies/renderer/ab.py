@@ -1,7 +1,6 @@
-#!/usr/bin/env python3
 """Compares two builds of the path tracer: CPU seconds per render, task by task.
 
-Usage: scripts/render-ab BEFORE AFTER [--rounds R] [--repeat K] [--threads T] [TASK ...]
+Usage: python -m studies render-ab BEFORE AFTER [--rounds R] [--repeat K] [--threads T] [TASK ...]
 
 BEFORE and AFTER are `pathtracer` binaries. Each round runs, for every task, both binaries'
 `pathtracer render TASK --target --repeat K --threads T` (the order of the two turning every
@@ -12,35 +11,33 @@ their ratio. Defaults: 5 rounds, K = 5, one thread, all seven tasks. Run it unde
 shared machine; the outputs go to a temporary folder.
 """
 
+from __future__ import annotations
+
 import argparse
 import statistics
-import subprocess
 import sys
 import tempfile
 
-TASKS = ["cup", "shadow", "occlusion", "gi", "sort", "caustic", "texture"]
+from studies.renderer.binary import TASKS, render_report
 
 
-def cpu_seconds(binary, task, repeat, threads, out):
-    """`render_cpu_seconds` of one `pathtracer render` run (the median of its `repeat`)."""
-    cmd = [binary, "render", task, "--target", "--repeat", str(repeat)]
-    cmd += ["--threads", str(threads), "--out", out]
-    text = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
-    for line in text.splitlines():
-        if line.startswith("render_cpu_seconds:"):
-            return float(line.split(":")[1])
-    sys.exit(f"render-ab: {binary} printed no render_cpu_seconds for {task}")
+def cpu_seconds(binary: str, task: str, repeat: int, threads: int, out: str) -> float:
+    """`render_cpu_seconds` of one `pathtracer render` run (the mean of its `repeat`)."""
+    report = render_report(binary, task, repeat, threads, out)
+    if "render_cpu_seconds" not in report:
+        sys.exit(f"render-ab: {binary} printed no render_cpu_seconds for {task}")
+    return float(report["render_cpu_seconds"])
 
 
-def main():
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("before")
     ap.add_argument("after")
-    ap.add_argument("tasks", nargs="*", default=TASKS)
+    ap.add_argument("tasks", nargs="*", default=list(TASKS))
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--threads", type=int, default=1)
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     for name in ("rounds", "repeat", "threads"):
         if getattr(a, name) < 1:
             ap.error(f"--{name} must be at least 1")
