@@ -26,6 +26,12 @@ pub(crate) enum RunEnd {
     /// The best value of a generation has not improved for a long window: pycma's
     /// tolstagnation.
     Stagnation,
+    /// Over twice TolFun's window no generation improved on the run's best, and half of them
+    /// drew the same best value as the last, which was not flat: the mean is parked in one
+    /// cell of a staircase, its spread too wide for a flat generation and too narrow to reach
+    /// a lower step (the step ellipsoid's rotated steps). Tolstagnation's verdict, reached
+    /// sooner. A flat generation is a plateau to cross (the spread grows) and never parked.
+    Parked,
     /// The spread grew beyond `1e8` times its start: the function looks flat everywhere.
     Flat,
 }
@@ -90,6 +96,21 @@ impl SearchGaussian {
             .collect()
     }
 
+    /// Whether the run is [`RunEnd::Parked`], `best` the last generation's best value. The
+    /// history is scanned only when the last two generations' bests tie.
+    fn parked(&self, best: f64) -> bool {
+        let h = &self.best_history;
+        let window = 2 * self.tolfun_window();
+        if h.len() <= window || h[h.len() - 2] != best {
+            return false;
+        }
+        let (earlier, recent) = h.split_at(h.len() - window);
+        let before = earlier.iter().copied().fold(f64::INFINITY, f64::min);
+        let improved = recent.iter().any(|&v| v < before);
+        let repeats = recent.iter().filter(|&&v| v == best).count();
+        !improved && 2 * repeats >= window
+    }
+
     pub(super) fn check_end(&self, flat: bool, best: f64, worst: f64) -> Option<RunEnd> {
         let n = self.n;
         let max_d = self.d.max();
@@ -121,6 +142,9 @@ impl SearchGaussian {
         if (max_d / min_d).powi(2) > 1e14 {
             return Some(RunEnd::Condition);
         }
+        if !flat && self.parked(best) {
+            return Some(RunEnd::Parked);
+        }
         let window = self.tolfun_window();
         if !flat && self.best_history.len() >= window {
             let recent = &self.best_history[self.best_history.len() - window..];
@@ -146,5 +170,59 @@ impl SearchGaussian {
             return Some(RunEnd::Stagnation);
         }
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run at n = 2, lambda 6 (TolFun's window 20 generations, Parked's 40) with the given
+    /// generations' best values.
+    fn run_with(history: &[f64]) -> SearchGaussian {
+        let mut run = SearchGaussian::new(&[0.0, 0.0], 1.0, &[1.0, 1.0], 6, true);
+        run.best_history = history.to_vec();
+        run
+    }
+
+    /// 10 generations descending to 7, then 40 in pairs of 7.2 and pairs of 7.5 (the cell the
+    /// mean sits in), ending on a pair of 7.5.
+    fn parked_history() -> Vec<f64> {
+        let mut h: Vec<f64> = (0..10).map(|k| 16.0 - k as f64).collect();
+        h.extend((0..40).map(|k| if k % 4 < 2 { 7.2 } else { 7.5 }));
+        h
+    }
+
+    #[test]
+    fn a_run_drawing_the_same_best_for_half_its_window_is_parked() {
+        let run = run_with(&parked_history());
+        assert_eq!(run.tolfun_window(), 20);
+        assert!(run.parked(7.5));
+        assert_eq!(run.check_end(false, 7.5, 9.0), Some(RunEnd::Parked));
+        assert!(!RunEnd::Parked.converged());
+    }
+
+    #[test]
+    fn a_flat_generation_is_never_parked() {
+        let run = run_with(&parked_history());
+        assert_ne!(run.check_end(true, 7.5, 9.0), Some(RunEnd::Parked));
+    }
+
+    #[test]
+    fn an_improvement_a_changed_best_or_fewer_repeats_is_not_parked() {
+        let mut improved = parked_history();
+        improved[30] = 6.9;
+        assert!(!run_with(&improved).parked(7.5));
+
+        let mut changed = parked_history();
+        *changed.last_mut().unwrap() = 7.3;
+        assert!(!run_with(&changed).parked(7.3));
+
+        let mut fewer = parked_history();
+        fewer[12] = 7.4; // 19 of the 40 draw 7.5
+        assert!(!run_with(&fewer).parked(7.5));
+
+        let short = &parked_history()[..40];
+        assert!(!run_with(short).parked(7.5));
     }
 }
