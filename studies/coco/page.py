@@ -76,9 +76,10 @@ INTRO = """# COCO: bbob and bbob-mixint
 Written by `python -m studies coco page` from the runs of `python -m studies coco run`
 (the peers from `studies/coco/requirements.txt`, installed with
 `scripts/venv target/venv-coco studies/coco/requirements.txt`, and the plateau_free wheel
-beside them). The full grid is `run --suites bbob-mixint,bbob --dims 5,10,20,40
---instances 1-5`; the runs below may be a part of it, stated above each suite's tables (the
-dimensions and instances that fitted the time on a shared 2-core machine).
+beside them). The full grid is `run --dims 5,10,20,40 --instances 1-5` and, bbob alone
+having n = 2, `run --suites bbob --dims 2 --instances 1-5`; the runs below may be a part of
+it, stated above each suite's tables (the dimensions and instances that fitted the time on a
+shared 2-core machine).
 
 The suites are COCO's (coco-experiment 2.8.2, `cocoex`): `bbob`, the 24 noiseless functions,
 and `bbob-mixint`, the same functions with four fifths of the variables integer (of 2, 4, 8
