@@ -99,11 +99,11 @@ pub(super) fn clamp_continuous(
 
 /// The discrete coordinates of `x` folded into the box `(lo, hi)` ([`fold`]).
 pub(super) fn fold_discrete(x: &mut [f64], (lo, hi): &(Vec<f64>, Vec<f64>), steps: Option<&[f64]>) {
-    let Some(steps) = steps else {
-        return;
-    };
+    if steps.is_none() {
+        return; // no discrete coordinate: no pass over the point
+    }
     for (i, v) in x.iter_mut().enumerate() {
-        if steps[i] > 0.0 {
+        if folded(steps, i) {
             *v = fold(*v, lo[i], hi[i]);
         }
     }
@@ -112,9 +112,9 @@ pub(super) fn fold_discrete(x: &mut [f64], (lo, hi): &(Vec<f64>, Vec<f64>), step
 /// A point of the box in the search's space: its discrete coordinates unfolded ([`unfold`]).
 pub(super) fn unfold_discrete(y: &[f64], o: &Options) -> Vec<f64> {
     let mut x = y.to_vec();
-    if let (Some((lo, hi)), Some(steps)) = (&o.bounds, &o.steps) {
+    if let Some((lo, hi)) = &o.bounds {
         for (i, v) in x.iter_mut().enumerate() {
-            if steps[i] > 0.0 {
+            if folded(o.steps.as_deref(), i) {
                 *v = unfold(*v, lo[i], hi[i]);
             }
         }
