@@ -4,6 +4,7 @@
 //! target reached, or (without restarts) a run converges. [`crate::run::Strategy::Adaptive`] of
 //! [`crate::AskTell`], and the polish after the paper's loop (`../polished.rs`).
 
+mod centre;
 mod fold;
 mod gaussian;
 mod repeats;
@@ -244,7 +245,8 @@ impl Adaptive {
         let run_end = if ranked.iter().all(|&v| v == f64::INFINITY) {
             dist.failed_generation()
         } else {
-            dist.update(ys, &ranked, ledger.best.fun)
+            let ys = centre::centred(ys, dist, &self.points, &ranked, &ledger.options);
+            dist.update(&ys, &ranked, ledger.best.fun)
         };
         // A warm-up (diagonal metric: gaussian/'s `Tpa`) that drew nothing better than the
         // best value seen before the run found the spread and nothing else: while sigma was
