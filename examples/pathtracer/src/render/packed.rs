@@ -3,7 +3,7 @@
 //! up to exact ties between two triangles' distances (tested against it in `geometry`'s
 //! tests).
 
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
 use obvhs::{bvh2::Bvh2, ray::Ray};
 
 use super::tri_lanes::{RayLanes, TriLanes};
@@ -67,11 +67,15 @@ impl PackedMesh {
         let lanes = RayLanes::new(ray.origin, ray.direction);
         let mut hit = false;
         self.tree.traverse(&mut ray, |ray, first, count| {
-            hit = self.leaf(first, count).iter().any(|pack| {
+            for pack in self.leaf(first, count) {
                 let (t, hits) = pack.distances(&lanes, ray.tmin);
-                (0..4).any(|k| hits & (1 << k) != 0 && t[k] < ray.tmax)
-            });
-            !hit
+                let before = Vec4::from_array(t).cmplt(Vec4::splat(ray.tmax)).bitmask();
+                if hits & before != 0 {
+                    hit = true;
+                    return false;
+                }
+            }
+            true
         });
         hit
     }

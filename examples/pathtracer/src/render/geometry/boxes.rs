@@ -171,7 +171,7 @@ impl BoxSet {
     /// Closest (distance, box) on the ray before `tmax`.
     #[inline(always)]
     pub(super) fn closest(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, u32)> {
-        let ray = BvhRay::new(o, d, T_MIN, tmax);
+        let ray = super::bvh_ray(o, d, tmax);
         let test = |r: &BvhRay, id: usize| self.hit(r, id);
         if let Some(pairs) = &self.pairs {
             return pairs.closest(ray, test);
@@ -185,7 +185,7 @@ impl BoxSet {
     /// Whether a box lies on the ray before `tmax`.
     #[inline(always)]
     pub(super) fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
-        let ray = BvhRay::new(o, d, T_MIN, tmax);
+        let ray = super::bvh_ray(o, d, tmax);
         let test = |r: &BvhRay, id: usize| self.hit(r, id);
         match &self.pairs {
             Some(pairs) => pairs.any(ray, test),

@@ -12,7 +12,6 @@ use obvhs::{
 };
 
 use super::super::packed::PackedMesh;
-use super::T_MIN;
 
 /// Which BVH a mesh uses (all built by obvhs; the fastest is the default, see the bench).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -146,7 +145,7 @@ impl Mesh {
     /// Closest hit (distance, triangle) of a ray given in the mesh's frame.
     #[inline(always)]
     pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, u32)> {
-        let ray = BvhRay::new(o, d, T_MIN, tmax);
+        let ray = super::bvh_ray(o, d, tmax);
         let mut hit = RayHit::none();
         let tris = &self.prepared;
         let found = match &self.accel {
@@ -160,7 +159,7 @@ impl Mesh {
     /// Whether anything lies on the ray before `tmax` (ray in the mesh's frame).
     #[inline(always)]
     pub fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
-        let ray = BvhRay::new(o, d, T_MIN, tmax);
+        let ray = super::bvh_ray(o, d, tmax);
         let tris = &self.prepared;
         let miss = match &self.accel {
             Accel::Packed(p) => return p.any(ray),

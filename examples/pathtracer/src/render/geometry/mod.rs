@@ -29,6 +29,23 @@ pub const NO_LIGHT: u32 = u32::MAX;
 /// Hits closer than this are self-intersections (origins are also offset along the normal).
 pub(crate) const T_MIN: f32 = 1e-6;
 
+/// obvhs's `Ray::new(o, d, T_MIN, tmax)`, the three inverse components in one 3-wide pass
+/// instead of one by one: each lane is `safe_inverse`'s (`1 / x`, or `signum(x) / EPSILON` for
+/// `|x| <= EPSILON`, where dividing by the power of two 2^-23 is the exact product with 2^23),
+/// so the ray is the same bits (`bvh_ray_is_obvhs_ray`).
+#[inline(always)]
+pub(crate) fn bvh_ray(o: Vec3A, d: Vec3A, tmax: f32) -> obvhs::ray::Ray {
+    let small = d.abs().cmple(Vec3A::splat(f32::EPSILON));
+    let tiny = d.signum() * Vec3A::splat(1.0 / f32::EPSILON);
+    obvhs::ray::Ray {
+        origin: o,
+        direction: d,
+        inv_direction: Vec3A::select(small, tiny, Vec3A::ONE / d),
+        tmin: T_MIN,
+        tmax,
+    }
+}
+
 /// A surface point found by a ray.
 #[derive(Clone, Copy, Debug)]
 pub struct Surface {

@@ -288,3 +288,49 @@ fn rotated_box_and_box_set_agree_with_geometry() {
     assert!(geo.occluded(Vec3A::new(10.0, 0.0, 0.0), Vec3A::NEG_X, 8.0));
     assert!(!geo.occluded(Vec3A::new(10.0, 0.0, 0.0), Vec3A::NEG_X, 5.0));
 }
+
+#[test]
+fn bvh_ray_is_obvhs_ray() {
+    // Components around obvhs's EPSILON cut-off (both sides, both signs, zeros) and ordinary
+    // unit directions: the same inverse bits as `Ray::new`.
+    let eps = f32::EPSILON;
+    let edge = [
+        0.0,
+        -0.0,
+        eps,
+        -eps,
+        f32::from_bits(eps.to_bits() + 1),
+        f32::from_bits(eps.to_bits() - 1),
+        -f32::from_bits(eps.to_bits() + 1),
+        1e-30,
+        -1e-30,
+        1.0,
+        -1.0,
+    ];
+    let mut rng = crate::render::rng::Sampler::new(1, 2, 3);
+    let mut dirs = Vec::new();
+    for &x in &edge {
+        for &y in &edge {
+            dirs.push(Vec3A::new(x, y, 0.3));
+        }
+    }
+    for _ in 0..10_000 {
+        let (a, b) = rng.next_2d();
+        let (c, _) = rng.next_2d();
+        dirs.push(Vec3A::new(2.0 * a - 1.0, 2.0 * b - 1.0, 2.0 * c - 1.0).normalize_or(Vec3A::X));
+    }
+    let o = Vec3A::new(0.5, -1.0, 2.0);
+    for d in dirs {
+        let want = BvhRay::new(o, d, T_MIN, 3.0);
+        let got = super::bvh_ray(o, d, 3.0);
+        let bits = |r: &BvhRay| {
+            let v = [r.origin, r.direction, r.inv_direction];
+            (
+                v.map(|v| v.to_array().map(f32::to_bits)),
+                r.tmin.to_bits(),
+                r.tmax.to_bits(),
+            )
+        };
+        assert_eq!(bits(&got), bits(&want), "{d}");
+    }
+}
