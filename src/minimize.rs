@@ -178,8 +178,9 @@ impl<F> Minimizer<F> {
         /// its grid: the search's draws are rounded to the nearest multiple after they are
         /// clamped onto [`Minimizer::bounds`], and to the nearest multiple inside the box if
         /// that one is outside (so the box must hold a multiple on every discrete coordinate;
-        /// `[0.5, 3.5]` with step 1 holds 1, 2, 3). The search learns from the unrounded draws
-        /// and keeps the spread along a discrete coordinate above a floor tied to its step
+        /// `[0.5, 3.5]` with step 1 holds 1, 2, 3). The search learns from the unrounded draws,
+        /// but from a selected draw that rounded off the mean's tread at its grid point, and
+        /// keeps the spread along a discrete coordinate above a floor tied to its step
         /// (`docs/integers.md`). A coordinate more than `2^52` steps from zero is left as
         /// given: floats there are already spaced at least a step apart.
         ///

@@ -149,8 +149,9 @@ _OPTIONS: dict[str, _Option] = {
         ``scipy.optimize.milp`` and ``differential_evolution``): 1 an integer, 0 continuous,
         one per coordinate of ``x0`` (flattened) or one for all. Every point handed to ``fun``,
         ``x0`` included, and ``result.x`` have those coordinates rounded to integers inside
-        ``bounds`` (which must hold an integer on each); the spread along them keeps a floor
-        (``Minimizer::steps``, docs/integers.md)."""),
+        ``bounds`` (which must hold an integer on each); the spread along them keeps a floor,
+        and a selected draw that rounded to another integer than the mean's is learnt from at
+        that integer (``Minimizer::steps``, docs/integers.md)."""),
     "args": _row(_arguments, _ALL, "tuple, optional", """
         Extra arguments of ``fun``, as scipy's: ``fun(x, *args)`` (``fun(x, seed, *args)``
         when seeded).""", ask_tell=False),
