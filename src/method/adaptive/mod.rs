@@ -191,7 +191,8 @@ impl Adaptive {
             // Discrete coordinates are rounded for the evaluation only: the update learns
             // from the continuous offset, so that the spread along such a coordinate is
             // the search's, not the rounding's (which is 0 while the draws stay on the
-            // mean's tread).
+            // mean's tread); only a selected draw that left the mean's tread is learnt from
+            // at its grid point (`centre.rs`).
             o.snap(x.as_mut_slice());
             self.points.extend(x.iter());
         }
