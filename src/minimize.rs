@@ -61,10 +61,11 @@ pub fn minimize<F: Fn(&[f64]) -> f64>(f: F, x0: &[f64], budget: usize) -> Result
 /// mean `m`, ranks them by `f`, and moves `m` along the rank-weighted best offsets: the natural
 /// gradient of the Gaussian-smoothed, rank-transformed objective (a plateau-free gradient that
 /// ignores the scale of `f`). `sigma` follows cumulative step-size adaptation (it shrinks with
-/// progress, with no floor) and grows while the best quarter of a generation ties (a plateau) (a
+/// progress, with no floor) and grows while the best quarter of a generation ties (a
 /// plateau); `C` learns the function's metric with the CMA-ES rules (Hansen 2016). When a run
-/// converges or stalls, the next run starts from the best point seen with twice the
-/// population. Details, sources and measurements: `docs/convergence.md`.
+/// converges or stalls, the next run starts again from `x0` with twice the population, or
+/// from the best point seen when the run found it again (the best point is the result
+/// either way). Details, sources and measurements: `docs/convergence.md`.
 ///
 /// # Promises
 /// Whatever the strategy, the options and the budget:
@@ -215,8 +216,8 @@ impl<F> Minimizer<F> {
         /// The population of the first run (default `4 + floor(3 ln n)`); each restart doubles it.
         population(population: usize) => options.population = Some(population);
 
-        /// Whether a run that converged or stalled restarts from the best point with a doubled
-        /// population while budget remains (default: yes). Off, the run ends with
+        /// Whether a run that converged or stalled restarts with a doubled population while
+        /// budget remains (default: yes). Off, the run ends with
         /// [`Stop::Converged`].
         restarts(restarts: bool) => options.restarts = restarts;
 
@@ -228,7 +229,11 @@ impl<F> Minimizer<F> {
         /// (default: yes; the plateau rule).
         flat_growth(flat_growth: bool) => options.flat_growth = flat_growth;
 
-        /// Whether restarts start from the best point seen (default) or from `x0`.
+        /// Whether every restart starts from the best point seen. By default a restart starts
+        /// from `x0`, or from the best point after a run that found it again (the further
+        /// runs of [`Minimizer::patience`] then check it rather than search for it again).
+        /// The default won on COCO's bbob and bbob-mixint (`docs/convergence.md`, table 2b);
+        /// every restart from the best point won on the hand-written suite's Rastrigin.
         restart_from_best(from_best: bool) => options.restart_from_best = from_best;
 
         /// The metric the search distribution learns (default [`Metric::Auto`]).

@@ -16,10 +16,10 @@ pub(crate) struct Args {
     /// (written by an earlier full run), so that a change to one method does not cost the
     /// others' minutes (CMA-ES IPOP alone takes most of the 21).
     pub(crate) rerun: Option<Vec<Method>>,
-    /// Write every instance of the grid to this file (for `python/benchmarks/peers.py`) and
+    /// Write every instance of the grid to this file (for `studies/peers/peers.py`) and
     /// stop.
     pub(crate) export: Option<String>,
-    /// The rows of the peers (`python/benchmarks/peers.py`), for their section of the page.
+    /// The rows of the peers (`studies/peers/peers.py`), for their section of the page.
     pub(crate) peers: Option<String>,
 }
 

@@ -164,7 +164,7 @@ impl Problem {
 }
 
 impl Problem {
-    /// The instance as text for `python/benchmarks/peers.py`, which evaluates the same
+    /// The instance as text for `studies/peers/peers.py`, which evaluates the same
     /// functions in numpy: a line `kind n seed`, then one line each of the shift, the rotation
     /// (row-major), the start, and `checks` lines of a point followed by its value here (the
     /// harness refuses to run if its values differ). Floats print in Rust's shortest

@@ -1,5 +1,5 @@
 //! The stronger peers' section of the page: pycma's BIPOP-CMA-ES and nevergrad's NGOpt, run by
-//! `python/benchmarks/peers.py` on the instances `--export` wrote, their rows (columns of
+//! `studies/peers/peers.py` on the instances `--export` wrote, their rows (columns of
 //! `compare.csv`) read from `--peers FILE`. Each peer is compared with `minimize` on exactly the
 //! instances the peer ran.
 
@@ -63,7 +63,7 @@ pub fn section(md: &mut String, path: &str, peers: &[PeerRun], ours: &[PeerRun])
     writeln!(
         md,
         "\n## Stronger peers: pycma's BIPOP-CMA-ES and nevergrad's NGOpt\n\n\
-         Rows from `{path}`, written by `python/benchmarks/peers.py` (run by \
+         Rows from `{path}`, written by `studies/peers/peers.py` (run by \
          `scripts/compare-peers`, which also wrote this page) on the instances `compare \
          --export` wrote: the same shifts, rotations and start points, the functions written \
          again in numpy and checked against these at six points per instance before any run. \

@@ -66,9 +66,10 @@ _MINIMIZE_DOC = """Minimise ``fun`` from ``x0``: ``minimize(fun, x0)`` is the fi
     - ``'adaptive'`` (the default) is the library's general-purpose search,
       ``plateau_free::minimize`` / ``plateau_free::Minimizer``: a Gaussian search distribution
       around a mean, ranked values, a spread and metric that adapt to ``fun`` (and grow on
-      plateaus), restarts from the best point with a doubled population; no step size or
-      learning rate to choose. It spends at most ``budget`` evaluations (default
-      ``1000 * x0.size``) and returns the best point seen.
+      plateaus), restarts from ``x0`` (from the best point once a run has found it
+      again) with a doubled population; no step size or learning rate to choose. It spends
+      at most ``budget`` evaluations (default ``1000 * x0.size``) and returns the best point
+      seen.
     - ``'plateau'`` (also spelt ``'paper'``) is the paper's loop: the plateau-free gradient,
       Adam and an annealed sigma; it returns the last iterate. ``'fd'`` (central finite
       differences of step ``step``) and ``'spsa'`` are baselines on the same loop.

@@ -212,8 +212,9 @@ _OPTIONS: dict[str, _Option] = {
         Adaptive, polished: the population of the first run (default ``4 + floor(3 ln n)``,
         at least 2); each restart doubles it."""),
     "restarts": _row(_flag, _SEARCH, "bool, optional", """
-        Adaptive, polished: restart from the best point with a doubled population when a run
-        converges or stalls while budget remains (default True)."""),
+        Adaptive, polished: restart from the start (``x0``; the polish: the loop's best point),
+        or from the best point once a run has found it again, with a doubled population when
+        a run converges or stalls while budget remains (default True)."""),
     "patience": _row(_count(" of restarts"), _SEARCH, "int, optional", """
         Adaptive, polished: how many restarts in a row must converge back at the best point
         seen before them for the run to be done before its budget (status 0, ``success``

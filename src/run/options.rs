@@ -13,8 +13,9 @@ use crate::Minimizer;
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Strategy {
     /// The default: a Gaussian search distribution with adaptive spread and metric, flat-step
-    /// growth of the spread on plateaus, and restarts from the best point with a doubled
-    /// population. Needs no step size or learning rate.
+    /// growth of the spread on plateaus, and restarts from `x0` (from the best point once a
+    /// run has found it again) with a doubled population. Needs no step size or learning
+    /// rate.
     Adaptive,
     /// The paper's loop: the plateau-free gradient ([`crate::PlateauFreeGradient`], radial
     /// sampler, antithetic pairs) with `samples` evaluations per estimate, [`crate::Adam`]
@@ -141,7 +142,7 @@ impl Default for Options {
             mirrored: true,
             flat_growth: true,
             metric: Metric::Auto,
-            restart_from_best: true,
+            restart_from_best: false,
             strategy: Strategy::Adaptive,
             polish: None,
             stall: None,

@@ -2,6 +2,7 @@
 
     pip install coco-experiment==2.8.2      # and the plateau_free wheel to measure
     python -m studies stopping-bbob run OUT.csv 0 1 2 3 4   # seeds; ~1 min a seed
+    python -m studies stopping-bbob run OUT.csv --patience 0 0 1 2 3 4   # the budget alone
     python -m studies stopping-bbob summary A.csv B.csv      # score and evaluations
     python -m studies stopping-bbob page OUT.md LABEL=A.csv[+B.csv] ...   # the results page
 
@@ -35,7 +36,9 @@ def optimum(problem):
     return problem(xopt)
 
 
-def run(out, seeds):
+def run(out, seeds, patience=None):
+    """One CSV row per problem and seed; ``patience`` is ``minimize``'s option (``None``: its
+    default)."""
     import cocoex
     import plateau_free as pf
 
@@ -55,7 +58,9 @@ def run(out, seeds):
                         best[0] = v
                     return v
 
-                pf.minimize(f, np.array(problem.initial_solution), budget=budget, seed=seed)
+                options = {} if patience is None else {"patience": patience}
+                pf.minimize(f, np.array(problem.initial_solution), budget=budget, seed=seed,
+                            **options)
                 reached = sum(best[0] - fopt <= t for t in TARGETS)
                 row = (problem.id_function, n, problem.id_instance, seed, count[0], budget)
                 fh.write(",".join(map(str, row + (reached, best[0] - fopt))) + "\n")
@@ -108,14 +113,20 @@ def page(out, arms):
             "fraction over targets and runs; the share of the budget is what the runs spent "
             "(below 1 when a stop rule ended them). Per function: the score over its runs.", "",
             f"Written by `python -m studies stopping-bbob page {out} {' '.join(arms)}`, from the "
-            "runs of `python -m studies stopping-bbob run OUT.csv SEEDS` (one CSV per arm).", ""]
+            "runs of `python -m studies stopping-bbob run OUT.csv [--patience K] SEEDS` (one CSV "
+            "per arm).", ""]
     text += _page.table(["", *labels], rows)
     _page.write(out, text)
 
 
 if __name__ == "__main__":
+    if {"-h", "--help"} & set(sys.argv[1:]):
+        sys.exit(__doc__)
     if len(sys.argv) >= 3 and sys.argv[1] == "run":
-        run(sys.argv[2], [int(s) for s in sys.argv[3:]] or [0])
+        rest, patience = sys.argv[3:], None
+        if rest[:1] == ["--patience"] and len(rest) >= 2:
+            patience, rest = int(rest[1]), rest[2:]
+        run(sys.argv[2], [int(s) for s in rest] or [0], patience)
     elif len(sys.argv) >= 3 and sys.argv[1] == "summary":
         summary(sys.argv[2:])
     elif len(sys.argv) >= 4 and sys.argv[1] == "page":

@@ -1,7 +1,11 @@
 //! The adaptive search, written once, as a state machine between asks: runs of a Gaussian
-//! search distribution (`gaussian/`: its draws and its update) from the start or the best
-//! point seen, each restart with twice the population, until the budget is spent, the
-//! target reached, or (without restarts) a run converges. [`crate::run::Strategy::Adaptive`] of
+//! search distribution (`gaussian/`: its draws and its update), each restart with twice the
+//! population, until the budget is spent, the target reached, or (without restarts) a run
+//! converges. A restart starts from `x0`, a fresh search of the whole region; after a run
+//! that found the best point again it starts from that point, so that the further runs the
+//! done rule asks for on ties (`repeats.rs`) check the point where it lies instead of
+//! searching for it again ([`crate::Minimizer::restart_from_best`] starts every restart
+//! there). [`crate::run::Strategy::Adaptive`] of
 //! [`crate::AskTell`], and the polish after the paper's loop (`../polished.rs`).
 
 mod centre;
@@ -33,6 +37,10 @@ pub(crate) struct Adaptive {
     lambda: usize,
     /// Where a run starts, in the search's space (the box's points unfolded: `fold.rs`).
     start: Vec<f64>,
+    /// The search's start (`x0`) in that space, where restarts go back to; empty in a search
+    /// read back from a checkpoint written before it was kept (its restarts stay at `start`).
+    #[cfg_attr(feature = "serde", serde(default))]
+    origin: Vec<f64>,
     iterations: usize,
     restarts: usize,
     /// The run in progress; `None` when the next ask starts one.
@@ -73,6 +81,7 @@ impl Adaptive {
             low_rank: o.metric == Metric::LowRank,
             lambda: o.population.unwrap_or_else(|| Params::default_lambda(n)),
             start: fold::unfold_discrete(x0, o),
+            origin: fold::unfold_discrete(x0, o),
             iterations: 0,
             restarts: 0,
             dist: None,
@@ -106,6 +115,9 @@ impl Adaptive {
     pub(crate) fn check(&self, n: usize) -> Result<(), Error> {
         use crate::check::len;
         len("adaptive start", self.start.len(), n)?;
+        if !self.origin.is_empty() {
+            len("adaptive origin", self.origin.len(), n)?;
+        }
         len("adaptive scales", self.scales.len(), n)?;
         // A failed ask leaves its points beside the last generation's seeds: whole rows.
         let whole = self.points.len() - self.points.len() % n;
@@ -271,8 +283,10 @@ impl Adaptive {
             }
             self.restarts += 1;
             self.lambda *= 2;
-            if o.restart_from_best {
+            if o.restart_from_best || self.repeats.found_again() {
                 self.start = fold::unfold_discrete(&ledger.best.x, o);
+            } else if !self.origin.is_empty() {
+                self.start.clone_from(&self.origin);
             }
             self.dist = None;
         }

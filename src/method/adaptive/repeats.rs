@@ -39,6 +39,11 @@ impl Repeats {
         }
     }
 
+    /// Whether the last converged run found the best point again (a repeat is under way).
+    pub(crate) fn found_again(&self) -> bool {
+        self.found > 0
+    }
+
     /// A run begins, with `best` the best point seen so far.
     pub(crate) fn begin(&mut self, best: &[f64]) {
         self.reference.clear();

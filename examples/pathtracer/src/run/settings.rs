@@ -44,7 +44,7 @@ pub enum Method {
     /// Simultaneous-perturbation stochastic approximation.
     Spsa,
     /// The library's adaptive search (`plateau_free::Minimizer`): mirrored Gaussian pairs with
-    /// step-size and covariance adaptation, a plateau rule and restarts from the best point,
+    /// step-size and covariance adaptation, a plateau rule and restarts from the start,
     /// given the same evaluations (N x iterations), sigma0, bounds and seed as the paper loop.
     Adaptive,
     /// The paper's loop (plateau-free gradient, Adam, annealing) on the first half of the

@@ -131,7 +131,7 @@ impl SearchGaussian {
         // cross but the objective's resolution (a renderer computing in single precision
         // cannot tell such points apart): growing the spread there makes it random-walk on
         // rounding noise (seen on CUP: 150 generations at 1e-8 to 1e-6). The run has
-        // converged; a restart, which keeps the best point, is worth more.
+        // converged; a restart (the best point stays the result's) is worth more.
         let m_scale = self.mean.iter().fold(1.0f64, |a, m| a.max(m.abs()));
         if flat && self.sigma * diag_max < 1e-6 * m_scale {
             return Some(RunEnd::Resolution);

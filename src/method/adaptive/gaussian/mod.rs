@@ -28,9 +28,10 @@
 //!   automatically instead of guessed). Not at a flat bottom: ties at the search's best
 //!   level with worse points around are the floor of a flat region, where growth would not
 //!   stop; three such generations end the run (`gaussian/ends.rs`).
-//! - **restarts from the best point seen** with a doubled population (IPOP: Auger and Hansen,
-//!   CEC 2005) when a run has converged or stalls; a larger population is a smoother, more
-//!   global estimate of the smoothed function's gradient, which multimodal functions need.
+//! - **restarts from `x0`** with a doubled population (IPOP: Auger and Hansen, CEC 2005)
+//!   when a run has converged or stalls; a larger population is a smoother, more global
+//!   estimate of the smoothed function's gradient, which multimodal functions need, and a
+//!   fresh start searches the whole region again instead of the basin the run left.
 //! - **resolution**: a flat generation at a spread below `1e-6` of the mean (`max(1, |m|)`)
 //!   is the objective's resolution (single-precision geometry in a renderer), not a plateau:
 //!   the run ends and restarts instead of growing `sigma` into a random walk on rounding noise.
