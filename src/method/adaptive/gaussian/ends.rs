@@ -6,6 +6,10 @@
 
 use super::SearchGaussian;
 
+/// The largest condition number of the covariance a run goes on with (pycma's
+/// `tolconditioncov`).
+pub(super) const MAX_CONDITION: f64 = 1e14;
+
 /// Why one run of the search distribution ended (and a restart is due).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum RunEnd {
@@ -21,7 +25,8 @@ pub(crate) enum RunEnd {
     /// Three flat generations in a row at the search's best level, with worse points around:
     /// the run sits at the bottom of a flat region and sees its walls, pycma's tolflatfitness.
     FlatBottom,
-    /// The covariance's condition number passed `1e14`.
+    /// The covariance's condition number passed [`MAX_CONDITION`] (over the continuous
+    /// coordinates when floors raise the discrete ones: `floor.rs`).
     Condition,
     /// The best value of a generation has not improved for a long window: pycma's
     /// tolstagnation.
@@ -114,7 +119,6 @@ impl SearchGaussian {
     pub(super) fn check_end(&self, flat: bool, best: f64, worst: f64) -> Option<RunEnd> {
         let n = self.n;
         let max_d = self.d.max();
-        let min_d = self.d.min();
         let diag_max = (0..n).map(|i| self.variance(i)).fold(0.0, f64::max).sqrt();
         if self.sigma * max_d > 1e8 * self.sigma_start {
             return Some(RunEnd::Flat);
@@ -139,7 +143,7 @@ impl SearchGaussian {
         if self.flat_bottom >= FLAT_BOTTOM_GENERATIONS {
             return Some(RunEnd::FlatBottom);
         }
-        if (max_d / min_d).powi(2) > 1e14 {
+        if self.condition(MAX_CONDITION) > MAX_CONDITION {
             return Some(RunEnd::Condition);
         }
         if !flat && self.parked(best) {

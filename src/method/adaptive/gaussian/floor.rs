@@ -74,6 +74,37 @@ impl SearchGaussian {
             None => self.d.iter_mut().zip(&scale).for_each(|(d, s)| *d *= s),
         }
     }
+
+    /// The covariance's condition number that [`super::RunEnd::Condition`] tests against
+    /// `limit`. The floors raise the discrete coordinates' variances in `C` on purpose, so
+    /// with floors and at least two continuous coordinates it is the condition of the
+    /// continuous coordinates' block (a block of one coordinate has none: the whole matrix
+    /// is tested then); the block is computed only when the whole matrix passes `limit`.
+    pub(super) fn condition(&self, limit: f64) -> f64 {
+        let whole = (self.d.max() / self.d.min()).powi(2);
+        if whole <= limit || self.floors.is_empty() {
+            return whole;
+        }
+        let continuous: Vec<usize> = (0..self.n).filter(|&i| self.floors[i] <= 0.0).collect();
+        if continuous.len() < 2 {
+            return whole;
+        }
+        let (largest, smallest) = match &self.full {
+            Some((cov, _)) => {
+                let k = continuous.len();
+                let block = DMatrix::from_fn(k, k, |a, b| cov[(continuous[a], continuous[b])]);
+                let e = block.symmetric_eigenvalues();
+                (e.max(), e.min())
+            }
+            None => {
+                let d = continuous.iter().map(|&i| self.d[i] * self.d[i]);
+                d.fold((0.0f64, f64::INFINITY), |(hi, lo), v| {
+                    (hi.max(v), lo.min(v))
+                })
+            }
+        };
+        largest / smallest.max(f64::MIN_POSITIVE)
+    }
 }
 
 #[cfg(test)]
@@ -89,5 +120,32 @@ mod tests {
         let leave = 2.0 * normal_cdf(-0.5 / f[1]);
         assert!((leave - 1.0 / 30.0).abs() < 1e-9, "{leave}");
         assert_eq!(f[2], 2.0 * f[1]);
+    }
+
+    #[test]
+    fn the_condition_leaves_out_the_raised_discrete_coordinates() {
+        // A discrete coordinate raised far above the others: condition 1e16 over the whole.
+        for full in [true, false] {
+            let mut run = SearchGaussian::new(&[0.0; 3], 1.0, &[1.0, 1e8, 2.0], 6, full);
+            assert_eq!(run.condition(1e14), 1e16);
+            run.floors = vec![0.0, 0.5, 0.0];
+            // The continuous block diag(1, 4).
+            assert!((run.condition(1e14) - 4.0).abs() < 1e-9, "{full}");
+            // Below the limit the whole matrix is the answer (a block's is never larger).
+            assert_eq!(run.condition(1e17), 1e16);
+            // One continuous coordinate: no block to judge, the whole matrix is tested.
+            run.floors = vec![0.5, 0.5, 0.0];
+            assert_eq!(run.condition(1e14), 1e16);
+        }
+        // A rotated block: the condition of its eigenvalues, not of its diagonal.
+        let mut run = SearchGaussian::new(&[0.0; 3], 1.0, &[1.0, 1e8, 2.0], 6, true);
+        run.floors = vec![0.0, 0.5, 0.0];
+        let (cov, _) = run.full.as_mut().unwrap();
+        cov[(0, 2)] = 1.5;
+        cov[(2, 0)] = 1.5;
+        // [[1, 1.5], [1.5, 4]]: eigenvalues (5 +- sqrt(18)) / 2.
+        let root = 18f64.sqrt();
+        let expected = (5.0 + root) / (5.0 - root);
+        assert!((run.condition(1e14) - expected).abs() < 1e-9 * expected);
     }
 }
