@@ -5,8 +5,8 @@
 //! that found the best point again it starts from that point, so that the further runs the
 //! done rule asks for on ties (`repeats.rs`) check the point where it lies instead of
 //! searching for it again ([`crate::Minimizer::restart_from_best`] starts every restart
-//! there). [`crate::run::Strategy::Adaptive`] of
-//! [`crate::AskTell`], and the polish after the paper's loop (`../polished.rs`).
+//! there). [`crate::run::Strategy::Adaptive`] of [`crate::AskTell`], and the polish after
+//! the paper's loop (`../polished.rs`).
 
 mod centre;
 mod fold;
