@@ -12,6 +12,8 @@ from studies import _page
 from studies.coco.solvers import SOLVERS, SUBSET_SOLVERS
 
 GROUPS = {"f1-14": range(1, 15), "f15-24": range(15, 25)}
+DEVELOPMENT = range(1, 6)
+"""The instances looked at while the library was changed; the others are a second sample."""
 
 
 def reached(precision: float) -> float:
@@ -51,12 +53,12 @@ def spans(xs: list[int]) -> str:
     return ", ".join(out)
 
 
-def suite_section(name: str, runs: list[dict[str, Any]]) -> list[str]:
+def suite_section(name: str, runs: list[dict[str, Any]], note: str = "") -> list[str]:
     dims = sorted({r["n"] for r in runs})
     grid = "; ".join(
         f"n = {n}: functions {spans(sorted({r['f'] for r in runs if r['n'] == n}))}, instances "
         f"{spans(sorted({r['instance'] for r in runs if r['n'] == n}))}" for n in dims)
-    lines = [f"## {name}", "", f"{len(runs)} runs, budget 1000 n ({grid}).", ""]
+    lines = [f"## {name}", "", f"{len(runs)} runs, budget 1000 n ({grid}).{note}", ""]
     by_n = [(f"n = {n}", lambda r, n=n: r["n"] == n) for n in dims]
     lines += table(runs, [*by_n, ("all", lambda r: True)])
     for group, fids in GROUPS.items():
@@ -85,7 +87,8 @@ The suites are COCO's (coco-experiment 2.8.2, `cocoex`): `bbob`, the 24 noiseles
 and `bbob-mixint`, the same functions with four fifths of the variables integer (of 2, 4, 8
 and 16 values; COCO rounds them inside the function). These are the development instances
 (1-5): the functions and instances below were looked at while the library was changed, so
-they are not an unseen test set. Each run has `1000 n` evaluations, starts at COCO's
+they are not an unseen test set; bbob-mixint also ran instances 6-15, a second sample, in
+sections of their own after the development ones. Each run has `1000 n` evaluations, starts at COCO's
 `initial_solution`, has the seed of its instance number, and ends at `f_opt + 1e-8`. The
 score of a run is the fraction of the 11 targets `f_opt + 10^k`, `k = 2, 1, ..., -8`, that
 its best value reached; a cell is the mean over its runs (the best of a column in bold).
@@ -102,6 +105,35 @@ with integers are the box's and are not run. `minimize` is given the budget and 
 (`target=f_opt + 1e-8`); the peers are stopped by the counter that counts every run's
 evaluations alike.
 """
+
+
+def second(name: str, instances: str) -> str:
+    """The note on a suite's instances outside the development set."""
+    return (f" A second sample of the same functions, with other rotations, shifts and optima "
+            f"(`run --suites {name} --dims 5,10,20,40 --instances {instances}`, the solvers that "
+            "fitted the time): instances 6-10 also measured the choice of where restarts begin "
+            "([convergence.md](../convergence.md), table 2b), instances 11-15 no choice.")
+
+
+POOLED = (" Every instance above, development and second sample together, for the solvers that "
+          "ran both.")
+
+
+def instance_sections(name: str, runs: list[dict[str, Any]]) -> list[str]:
+    """A suite's development instances; then, when it ran others, those (a second sample) and
+    every instance pooled, for the solvers that ran the others."""
+    development = [r for r in runs if r["instance"] in DEVELOPMENT]
+    others = [r for r in runs if r["instance"] not in DEVELOPMENT]
+    lines = ["", *suite_section(name, development)] if development else []
+    if not others:
+        return lines
+    instances = spans(sorted({r["instance"] for r in others}))
+    lines += ["", *suite_section(f"{name}, instances {instances}", others,
+                                 second(name, instances))]
+    both = {r["solver"] for r in others} & {r["solver"] for r in development}
+    pooled = [r for r in runs if r["solver"] in both]
+    everything = spans(sorted({r["instance"] for r in pooled}))
+    return lines + ["", *suite_section(f"{name}, instances {everything}", pooled, POOLED)]
 
 
 def subset_section(solver: str, runs: list[dict[str, Any]]) -> list[str]:
@@ -132,8 +164,7 @@ def write_page(runs_dir: Path, page: Path) -> None:
     lines = INTRO.splitlines()
     for name in ("bbob-mixint", "bbob"):
         mine = [r for r in grid if r["suite"] == name]
-        if mine:
-            lines += ["", *suite_section(name, mine)]
+        lines += instance_sections(name, mine)
     for solver in SUBSET_SOLVERS:
         lines += subset_section(solver, runs)
     _page.write(page, lines, runs=runs_dir)
