@@ -87,9 +87,9 @@ The suites are COCO's (coco-experiment 2.8.2, `cocoex`): `bbob`, the 24 noiseles
 and `bbob-mixint`, the same functions with four fifths of the variables integer (of 2, 4, 8
 and 16 values; COCO rounds them inside the function). These are the development instances
 (1-5): the functions and instances below were looked at while the library was changed, so
-they are not an unseen test set; bbob-mixint also ran instances 6-15, a second sample, in
-sections of their own after the development ones. Each run has `1000 n` evaluations, starts at COCO's
-`initial_solution`, has the seed of its instance number, and ends at `f_opt + 1e-8`. The
+they are not an unseen test set. Instances a suite ran beyond them are a second sample, in
+sections of their own after the development ones. Each run has `1000 n` evaluations, starts
+at COCO's `initial_solution`, has the seed of its instance number, and ends at `f_opt + 1e-8`. The
 score of a run is the fraction of the 11 targets `f_opt + 10^k`, `k = 2, 1, ..., -8`, that
 its best value reached; a cell is the mean over its runs (the best of a column in bold).
 `f_opt` is the one COCO's own logger writes in its data files (for bbob-mixint it differs
@@ -107,10 +107,13 @@ evaluations alike.
 """
 
 
-def second(name: str, instances: str) -> str:
-    """The note on a suite's instances outside the development set."""
+def second(name: str, runs: list[dict[str, Any]]) -> str:
+    """The note on a suite's runs outside the development instances: the command that makes
+    them and which choices they measured."""
+    dims = ",".join(str(n) for n in sorted({r["n"] for r in runs}))
+    instances = spans(sorted({r["instance"] for r in runs}))
     return (f" A second sample of the same functions, with other rotations, shifts and optima "
-            f"(`run --suites {name} --dims 5,10,20,40 --instances {instances}`, the solvers that "
+            f"(`run --suites {name} --dims {dims} --instances {instances}`, the solvers that "
             "fitted the time): instances 6-10 also measured the choice of where restarts begin "
             "([convergence.md](../convergence.md), table 2b), instances 11-15 no choice.")
 
@@ -128,8 +131,7 @@ def instance_sections(name: str, runs: list[dict[str, Any]]) -> list[str]:
     if not others:
         return lines
     instances = spans(sorted({r["instance"] for r in others}))
-    lines += ["", *suite_section(f"{name}, instances {instances}", others,
-                                 second(name, instances))]
+    lines += ["", *suite_section(f"{name}, instances {instances}", others, second(name, others))]
     both = {r["solver"] for r in others} & {r["solver"] for r in development}
     pooled = [r for r in runs if r["solver"] in both]
     everything = spans(sorted({r["instance"] for r in pooled}))
