@@ -123,6 +123,20 @@ def _sampling(name: str, value: Any) -> str:
     return spelt
 
 
+_METRICS = ("auto", "full", "diagonal", "low_rank")
+
+
+def _metric(name: str, value: Any) -> str:
+    must = f"{name} = {_show(value)} is not a metric: use 'auto', 'full', 'diagonal' or 'low_rank'"
+    if not isinstance(value, str):
+        raise OptionTypeError(must)
+    spelt = value.lower().replace("-", "_").replace(" ", "_")  # a Metric's value
+    spelt = "low_rank" if spelt == "lowrank" else spelt
+    if spelt not in _METRICS:
+        raise ValueError(must)
+    return spelt
+
+
 def _annealer(name: str, value: Any) -> Union[str, Annealer]:
     must = (
         f"{name} = {_show(value)} is not a schedule: use 'paper', 'constant', 'exponential', "

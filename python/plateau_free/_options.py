@@ -34,6 +34,7 @@ from ._checks import (
     _count,
     _counter,
     _flag,
+    _metric,
     _number,
     _path,
     _policy,
@@ -74,6 +75,7 @@ class Options(TypedDict, total=False):
     keep_history: Optional[int]
     target: Optional[float]
     population: Optional[int]
+    metric: Optional[str]
     restarts: Optional[bool]
     patience: Optional[int]
     polish: Optional[float]
@@ -211,6 +213,14 @@ _OPTIONS: dict[str, _Option] = {
     "population": _row(_count(), _SEARCH, "int, optional", """
         Adaptive, polished: the population of the first run (default ``4 + floor(3 ln n)``,
         at least 2); each restart doubles it."""),
+    "metric": _row(_metric, _SEARCH, "str, optional", """
+        Adaptive, polished: the metric the search distribution learns (``Metric``):
+        ``'auto'`` (default: ``'full'`` up to n = 200, ``'diagonal'`` above), ``'full'`` (a
+        covariance: rotated, ill-conditioned functions; ``O(n^2)`` per evaluation, refused
+        above n = 10,000), ``'diagonal'`` (one spread per coordinate, ``O(n)``) or
+        ``'low_rank'`` (the diagonal times ``4 + 3 ln n`` directions of recent progress,
+        LM-MA-ES's limited memory: rotated structure at ``O(n ln n)``; measured in
+        docs/results/large-scale.md)."""),
     "restarts": _row(_flag, _SEARCH, "bool, optional", """
         Adaptive, polished: restart from the start (``x0``; the polish: the loop's best point),
         or from the best point once a run has found it again, with a doubled population when
@@ -472,6 +482,7 @@ def _adaptive_options(
         "bounds": checked.get("bounds"),
         "target": checked.get("target"),
         "population": checked.get("population"),
+        "metric": checked.get("metric", "auto"),
         "restarts": checked.get("restarts", True),
         "paper": paper,
         "polish": polish,

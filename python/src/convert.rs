@@ -240,6 +240,8 @@ pub(crate) struct AdaptiveOptions {
     bounds: Option<Bounds>,
     target: Option<f64>,
     population: Option<usize>,
+    /// `Minimizer::metric`: `'auto'`, `'full'`, `'diagonal'` or `'low_rank'`.
+    metric: PyMetric,
     restarts: bool,
     /// `method='polished'`: `Strategy::Paper`'s `(samples, lr, sigma0)`; None for the
     /// adaptive search alone.
@@ -266,6 +268,7 @@ impl AdaptiveOptions {
         };
         let minimizer = minimizer
             .seed(self.seed)
+            .metric(self.metric.0)
             .restarts(self.restarts)
             .on_failure(policy);
         let minimizer = maybe(minimizer, self.budget, RsMinimizer::budget);
@@ -287,6 +290,26 @@ impl AdaptiveOptions {
         });
         let minimizer = maybe(minimizer, self.polish, RsMinimizer::polish);
         maybe(minimizer, self.stall, RsMinimizer::stop_when_stalled)
+    }
+}
+
+/// A [`Metric`] by its Python name (`plateau_free._checks._metric` spells it).
+pub(crate) struct PyMetric(Metric);
+
+impl FromPyObject<'_, '_> for PyMetric {
+    type Error = PyErr;
+
+    fn extract(value: Borrowed<'_, '_, PyAny>) -> PyResult<Self> {
+        let name: String = value.extract()?;
+        match name.as_str() {
+            "auto" => Ok(PyMetric(Metric::Auto)),
+            "full" => Ok(PyMetric(Metric::Full)),
+            "diagonal" => Ok(PyMetric(Metric::Diagonal)),
+            "low_rank" => Ok(PyMetric(Metric::LowRank)),
+            _ => Err(PyValueError::new_err(format!(
+                "metric = '{name}' is not a metric: use 'auto', 'full', 'diagonal' or 'low_rank'"
+            ))),
+        }
     }
 }
 

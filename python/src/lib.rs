@@ -26,10 +26,10 @@ use numpy::{
 };
 use plateau_free::baseline::{FiniteDifference as RsFiniteDifference, Spsa as RsSpsa};
 use plateau_free::{
-    anneal::Schedule, objective::Points, run::FailurePolicy, run::HistoryKeep, run::Strategy,
-    Adam as RsAdam, Annealer as RsAnnealer, Error, GradientEstimator, Minimizer as RsMinimizer,
-    Minimum as RsMinimum, Objective, Optimizer, PlateauFreeGradient as RsPlateauFreeGradient,
-    Sampling, Stop,
+    anneal::Schedule, objective::Points, run::FailurePolicy, run::HistoryKeep, run::Metric,
+    run::Strategy, Adam as RsAdam, Annealer as RsAnnealer, Error, GradientEstimator,
+    Minimizer as RsMinimizer, Minimum as RsMinimum, Objective, Optimizer,
+    PlateauFreeGradient as RsPlateauFreeGradient, Sampling, Stop,
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;

@@ -82,6 +82,48 @@ def test_seeded_bounds_sigma0_bit_identical():
     same(batched, rust)
 
 
+def long_axes_ellipsoid(n):
+    """The ellipsoid of the Rust test ``tests/low_rank.rs``: condition 1e4, its three long
+    axes dense unit vectors (no coordinate axis among them), batched."""
+    axes = []
+    for k in range(3):
+        v = np.array([((i * (2 * k + 3) + k) % 17) - 8.0 for i in range(n)])
+        for a in axes:
+            v -= (v @ a) * a
+        axes.append(v / np.linalg.norm(v))
+    a = np.array(axes)
+
+    def f(xs):
+        along = ((xs @ a.T) ** 2).sum(axis=1)
+        return 1e4 * ((xs * xs).sum(axis=1) - along) + along
+
+    return f, 1.0 + ((np.arange(n) * 7) % 11) / 11.0
+
+
+def test_metric_auto_is_full_up_to_200_and_diagonal_above():
+    for n, same_as in [(6, "full"), (200, "full"), (201, "diagonal")]:
+        f, x0 = long_axes_ellipsoid(n)
+        runs = [plateau_free.minimize(f, x0, budget=3000, seed=1, batched=True, metric=m) for m in ("auto", same_as)]
+        assert np.array_equal(runs[0].x, runs[1].x) and runs[0].fun == runs[1].fun
+        other = "diagonal" if same_as == "full" else "low_rank"
+        assert plateau_free.minimize(f, x0, budget=3000, seed=1, batched=True, metric=other).fun != runs[0].fun
+
+
+def test_metric_low_rank_learns_a_rotated_ellipsoid_the_diagonal_does_not():
+    # As tests/low_rank.rs: n = 500, 200,000 evaluations (the directions need about 10^5 to
+    # grow); there the diagonal ends near 4 and the low rank near 0.02.
+    f, x0 = long_axes_ellipsoid(500)
+    diagonal, low_rank = (
+        plateau_free.minimize(f, x0, budget=200_000, seed=0, batched=True, metric=m) for m in ("diagonal", "low_rank")
+    )
+    assert low_rank.fun < diagonal.fun / 20.0
+    asked = plateau_free.ask_tell(x0, budget=200_000, seed=0, metric="lowrank")
+    while not asked.done:
+        xs, _ = asked.ask()
+        asked.tell(f(xs))
+    assert asked.result.fun == low_rank.fun
+
+
 def test_batched_is_called_once_per_iteration():
     calls = []
 

@@ -38,16 +38,17 @@ VALUES = dict(
     antithetic=False, annealer="cosine", sigma_min=0.05, step=0.01, orthogonal=True,
     parallel=True, record_x=True, final_evaluation=False, checkpoint="never-written.json",
     checkpoint_every=3, keep_history=5, stop_when_stalled=0.2, workers=2, disp=False,
-    patience=2, args=(1,), on_failure="raise",
+    patience=2, args=(1,), on_failure="raise", metric="diagonal",
 )  # fmt: skip
 # Options that every method takes.
 EVERY = {"budget", "bounds", "callback", "checkpoint", "checkpoint_every", "keep_history", "args",
          "workers", "disp"}
 TAKES = {
     "adaptive": EVERY | {"sigma0", "target", "population", "restarts", "stop_when_stalled",
-                         "workers", "disp", "patience", "on_failure"},
+                         "workers", "disp", "patience", "on_failure", "metric"},
     "polished": EVERY | {"sigma0", "target", "population", "restarts", "polish", "lr", "samples",
-                         "stop_when_stalled", "workers", "disp", "patience", "on_failure"},
+                         "stop_when_stalled", "workers", "disp", "patience", "on_failure",
+                         "metric"},
     "plateau": EVERY | {"sigma0", "iterations", "lr", "samples", "sampling", "antithetic",
                         "annealer", "sigma_min", "orthogonal", "parallel", "record_x",
                         "final_evaluation", "workers", "disp", "on_failure"},
@@ -126,6 +127,8 @@ BAD = [
     (dict(population=1), "population = 1 is invalid: must be at least 2"),
     (dict(population=4.5), "population = 4.5 must be a whole number, not negative and at most 18446744073709551615"),
     (dict(restarts="yes"), "restarts = 'yes' must be True or False"),
+    (dict(metric="sparse"), "metric = 'sparse' is not a metric: use 'auto', 'full', 'diagonal' or 'low_rank'"),
+    (dict(metric=2), "metric = 2 is not a metric"),
     (dict(on_failure="ignore"), "on_failure = 'ignore' is not a policy: use 'continue' or 'raise'"),
     (dict(on_failure=True), "on_failure = True is not a policy"),
     (dict(workers=0), "workers = 0 must be a whole number of threads from 1"),

@@ -3,7 +3,7 @@
 
     python -m studies large-scale-page OUT PAGE COMMAND
 
-``OUT`` holds ``texture-*.csv`` and ``bbob.csv``; ``PAGE`` is the page to write (the plot goes
+``OUT`` holds ``texture-*.csv`` and ``bbob*.csv``; ``PAGE`` is the page to write (the plot goes
 beside it, same name with ``.png``); ``COMMAND`` is the command the page names.
 """
 
@@ -20,7 +20,7 @@ from typing import Iterable
 
 from studies import _page
 
-SIZES = [768, 3072, 12288, 49152]
+SIZES = [768, 3072, 12288, 49152, 196608]
 BUDGETS = [10_000, 100_000, 1_000_000]
 SEEDS = [0, 1, 2]
 ARMS = {
@@ -40,9 +40,13 @@ PEERS = {
     "pysepcma": "sep-CMA-ES (pypop7)",
 }
 ALL = {**ARMS, **PEERS}
+# The peers given the box [0, 1] (``run.py``'s ``BOXED``): the table of every arm given the box.
+BOXED = {"sepcma-box": "sep-CMA-ES (pycma, its `bounds`)"} | {f"{a}-box": label for a, label in PEERS.items()}
+LABELS = {**ALL, **BOXED}
 # The arms of the yardsticks' table, and its sizes.
 YARDSTICK_ARMS = ["minimize", "minimize-box", "minimize-sigma", "sepcma", *PEERS]
-YARDSTICK_SIZES = [768, 3072, 12288, 49152]
+YARDSTICK_SIZES = SIZES
+BOXED_ARMS = ["minimize-box", *BOXED]
 Row = dict[str, str]
 
 
@@ -105,8 +109,8 @@ def in_grid(arm: str, n: int, budget: int) -> bool:
     method's 10^5 up to n = 3,072), 10^6 at n = 768 (not for the image method); ``minimize``
     with sigma0 0.25 at n <= 3,072; pypop7's strategies at 10^4 at every size and at 10^5 up
     to n = 12,288."""
-    if arm in PEERS:
-        return budget == 10_000 and n <= 49152 or budget == 100_000 and n <= 12288
+    if arm in PEERS or arm in BOXED and arm != "sepcma-box":
+        return budget == 10_000 or budget == 100_000 and n <= 12288
     if arm == "minimize-sigma" and n > 3072:
         return False
     if budget == 1_000_000:
@@ -124,7 +128,7 @@ def texture_table(rows: list[Row], arms: list[str], sizes: list[int]) -> tuple[l
     the image method), and the cells of the grid that did not run."""
     cells = texture_cells(rows)
     lines = [
-        "| n | evaluations | start (median) | " + " | ".join(ALL[a] for a in arms) + " |",
+        "| n | evaluations | start (median) | " + " | ".join(LABELS[a] for a in arms) + " |",
         "|---|---|---|" + "---|" * len(arms),
     ]
     missing: list[str] = []
@@ -134,7 +138,7 @@ def texture_table(rows: list[Row], arms: list[str], sizes: list[int]) -> tuple[l
             for arm in arms:
                 text, value = cell_text(cells.get((arm, n, b), []))
                 if not text and in_grid(arm, n, b):
-                    missing.append(f"{ALL[arm]}, n = {n:,}, {b:.0e} evaluations")
+                    missing.append(f"{LABELS[arm]}{' (the box)' if arm in BOXED else ''}, n = {n:,}, {b:.0e} evaluations")
                 texts.append(text)
                 values.append(value)
             if all(not t for t in texts):
@@ -149,14 +153,34 @@ def texture_table(rows: list[Row], arms: list[str], sizes: list[int]) -> tuple[l
     return lines, missing
 
 
+def standing(rows: list[Row], arm: str, peers: list[str]) -> str:
+    """Where ``arm``'s median is the lowest of ``peers``' and where it is not, over the rows in
+    which it and at least one of them ran."""
+    cells = texture_cells(rows)
+    behind, rows_seen = [], 0
+    for n in SIZES:
+        for b in BUDGETS:
+            own = cell_text(cells.get((arm, n, b), []))[1]
+            theirs = {p: cell_text(cells.get((p, n, b), []))[1] for p in peers}
+            theirs = {p: v for p, v in theirs.items() if not math.isnan(v)}
+            if math.isnan(own) or not theirs:
+                continue
+            rows_seen += 1
+            leader = min(theirs, key=lambda p: theirs[p])
+            if theirs[leader] < own:
+                behind.append(f"n = {n:,} with {b:.0e} evaluations ({fmt(own)} against {LABELS[leader]}'s {fmt(theirs[leader])})")
+    text = f"{LABELS[arm]} is at or below every peer in {rows_seen - len(behind)} of the {rows_seen} rows where both ran"
+    return text + ("; behind in " + "; ".join(behind) + "." if behind else ".")
+
+
 def never_worse(rows: list[Row]) -> list[str]:
     lines = []
-    for arm in ALL:
+    for arm in LABELS:
         runs = [r for r in rows if r["arm"] == arm and r["capped"] == "0"]
         worse = [r for r in runs if float(r["loss"]) > float(r["start_loss"])]
         if not runs:
             continue
-        text = f"- {ALL[arm]}: {len(runs) - len(worse)} of {len(runs)} finished runs at or below the start"
+        text = f"- {LABELS[arm]}{' given the box' if arm in BOXED else ''}: {len(runs) - len(worse)} of {len(runs)} finished runs at or below the start"
         if worse:
             text += ": worse in " + ", ".join(
                 f"n = {int(r['n']):,} seed {r['seed']} at {int(r['budget']):.0e} ({fmt(float(r['loss']))} > {fmt(float(r['start_loss']))})"
@@ -349,8 +373,8 @@ BBOB_METHODS = {
 }
 # The functions every method runs at each n (``scripts/large-scale``), and pypop7's subset.
 BBOB_SEVEN = [2, 1, 10, 8, 12, 7, 15]
-BBOB_GRID = {n: list(range(1, 25)) for n in (20, 40, 80, 160)} | {320: BBOB_SEVEN}
-PEERS_BBOB_GRID = {n: BBOB_SEVEN for n in (80, 160, 320)}
+BBOB_GRID = {n: list(range(1, 25)) for n in (20, 40, 80, 160)} | {320: BBOB_SEVEN, 640: BBOB_SEVEN}
+PEERS_BBOB_GRID = {n: BBOB_SEVEN for n in (80, 160, 320, 640)}
 
 
 def bbob_score(runs: dict[tuple[int, int], dict[str, Row]], keys: list[tuple[int, int]], m: str) -> str:
@@ -411,18 +435,24 @@ def bbob_missing(rows: list[Row]) -> list[str]:
     return out
 
 
+def as_minimize(rows: list[Row], arm: str) -> list[Row]:
+    """The runs of ``arm`` (an option of ``minimize``) as the variant tables take them."""
+    key = "arm" if rows and "arm" in rows[0] else "method"
+    return [{**r, key: "minimize"} for r in rows if r[key] == arm]
+
+
 def main() -> None:
     if len(sys.argv) != 4:
         sys.exit("usage: python -m studies large-scale-page OUT PAGE COMMAND")
     out, page, command = sys.argv[1], sys.argv[2], sys.argv[3]
     rows = read(sorted(glob.glob(os.path.join(out, "texture-*.csv"))))
-    bbob_path = os.path.join(out, "bbob.csv")
-    bbob = read([bbob_path]) if os.path.exists(bbob_path) else []
+    bbob = read(sorted(glob.glob(os.path.join(out, "bbob*.csv"))))
     png = os.path.splitext(page)[0] + ".png"
     plot(rows, png)
     table, missing = texture_table(rows, list(ARMS), SIZES)
     yardsticks, missing_peers = texture_table(rows, YARDSTICK_ARMS, YARDSTICK_SIZES)
-    missing += [m for m in missing_peers if m not in missing]
+    boxed, missing_boxed = texture_table(rows, BOXED_ARMS, SIZES)
+    missing += [m for m in missing_peers + missing_boxed if m not in missing]
     template = open(os.path.join(os.path.dirname(__file__), "page.md")).read()
     tried = {
         "TPA warm-up, then CSA, no step back": read(glob.glob(os.path.join(out, "tried-warm-texture*.csv"))),
@@ -433,7 +463,7 @@ def main() -> None:
         "TPA only where CSA agrees": read(glob.glob(os.path.join(out, "tried-tpaguard-texture*.csv"))),
         "the warm-up without the two points after it": read(glob.glob(os.path.join(out, "tried-nopair-texture*.csv"))),
         "the warm-up twice as fast": read(glob.glob(os.path.join(out, "tried-fast-texture*.csv"))),
-        "the low-rank-plus-diagonal metric": read(glob.glob(os.path.join(out, "tried-lowrank-texture*.csv"))),
+        "the low-rank-plus-diagonal metric (`metric='low_rank'`)": as_minimize(rows, "minimize-lowrank"),
     }
     tried = {k: v for k, v in tried.items() if v}
     tried_bbob = {
@@ -442,7 +472,7 @@ def main() -> None:
         "median success rule": read(sorted(glob.glob(os.path.join(out, "tried-msr-bbob*.csv")))),
         "TPA": read(sorted(glob.glob(os.path.join(out, "tried-tpa-bbob*.csv")))),
         "the warm-up without the two points after it": read(sorted(glob.glob(os.path.join(out, "tried-nopair-bbob*.csv")))),
-        "the low-rank-plus-diagonal metric": read(sorted(glob.glob(os.path.join(out, "tried-lowrank-bbob*.csv")))),
+        "the low-rank-plus-diagonal metric (`metric='low_rank'`)": as_minimize(bbob, "minimize-lowrank"),
     }
     tried_bbob = {k: v for k, v in tried_bbob.items() if v}
     seeds_path = os.path.join(out, "tried-seeds-bbob.csv")
@@ -457,6 +487,8 @@ def main() -> None:
         overhead="\n".join(overhead(read([overhead_path]) if os.path.exists(overhead_path) else [])),
         table="\n".join(table),
         yardsticks="\n".join(yardsticks),
+        boxed="\n".join(boxed),
+        boxed_standing=standing(rows, "minimize-box", list(BOXED)),
         plot=os.path.basename(png),
         never_worse="\n".join(never_worse(rows)),
         seconds="\n".join(seconds_per_evaluation(rows)),

@@ -11,7 +11,10 @@ COCO's bbob-largescale archive; the arms, by the names the csv files use:
   IEEE TEVC 2021);
 - ``vkdcma``: VkD-CMA, covariance restricted to a diagonal plus k vectors, k adapted (Akimoto
   and Hansen, GECCO 2016);
-- ``pysepcma``: pypop7's separable CMA-ES (Ros and Hansen, PPSN 2008), beside pycma's.
+- ``pysepcma``: pypop7's separable CMA-ES (Ros and Hansen, PPSN 2008), beside pycma's;
+- ``ARM-box`` (on the texture task): ``ARM`` given the box ``[0, 1]^n``. pypop7's strategies
+  take the box only to draw a start when none is given, so the objective is evaluated at the
+  point projected onto the box, the repair ``minimize`` makes with ``bounds``.
 
 Each gets the start ``x0`` as its mean, one spread ``sigma`` (a quarter of the box's width: on
 the texture task 0.25 of the texels' ``[0, 1]``, pycma's advice, as pycma's sep-CMA-ES arm gets;
@@ -101,14 +104,16 @@ def run(
 def texture(arm: str, task: Texture, x0: Vector, budgets: list[int], seed: int, cap: float) -> Outcome:
     """``arm`` on the texture task: the best of the first ``B`` evaluations for each ``B``."""
     rec = Recorder(budgets)
+    strategy = arm.removesuffix("-box")
+    box = strategy != arm
 
     def fun(x: Vector) -> float:
-        v = task.loss(x[None, :])
+        v = task.loss(np.clip(x, 0.0, 1.0)[None, :] if box else x[None, :])
         rec.see(v)
         return float(v[0])
 
     t0 = time.perf_counter()
-    evaluations, capped = run(arm, fun, x0, 0.25, max(budgets), seed, cap, 0.0, 1.0)
+    evaluations, capped = run(strategy, fun, x0, 0.25, max(budgets), seed, cap, 0.0, 1.0)
     return Outcome(rec.values(capped), rec.evaluations, time.perf_counter() - t0, capped)
 
 

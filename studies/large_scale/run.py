@@ -20,7 +20,8 @@ already there is not run again):
 - ``minimize``: ``plateau_free.ask_tell(x0, budget=B, seed=seed)``, no other option;
   ``minimize-box`` with the texels' box ``bounds=[(0, 1)]`` and nothing else (its start spread
   a quarter of the box's width, every point projected onto the box); ``minimize-sigma`` with
-  ``sigma0=0.25``, the peers' spread, and no box. One run
+  ``sigma0=0.25``, the peers' spread, and no box; ``minimize-lowrank`` with
+  ``metric='low_rank'`` (the low-rank-plus-diagonal metric) and nothing else. One run
   at the largest budget gives every smaller one: the search does not depend on its budget, and
   its result at ``B`` is the best of the first ``B`` evaluations, which is what is recorded.
 - ``paper``: the paper's loop, ``method='plateau'`` with ``sigma0=0.025, lr=0.003,
@@ -38,13 +39,17 @@ already there is not run again):
   schedule depends on the budget (one run per budget); the value is the best point's.
 - ``lmcma``, ``lmmaes``, ``mmes``, ``vkdcma``, ``pysepcma``: pypop7's large-scale evolution
   strategies (``pypop.py``), sigma 0.25, on the texture task and on bbob-largescale.
+- ``sepcma-box`` and ``lmcma-box``, ..., ``pysepcma-box``: the same peers given the box
+  ``[0, 1]^n`` as well: pycma its ``bounds`` option, pypop7's strategies the objective at the
+  point projected onto the box.
 
 Every run has a wall-time cap (``--cap`` seconds); a run that reaches it is recorded with the
 evaluations it made and its best value so far, marked ``capped``.
 
 **bbob-largescale** (``bbob`` subcommand): COCO's ``bbob-largescale`` suite from the
 coco-experiment package (``cocoex``), ``minimize`` (``ask_tell(x0, budget=1000 n, seed=0)``,
-no other option; ``minimize-box`` with the suite's box ``[-5, 5]^n`` and nothing else) against sep-CMA-ES (pycma, ``CMA_diagonal=True``, sigma0 2, seed 1, with
+no other option; ``minimize-box`` with the suite's box ``[-5, 5]^n`` and nothing else;
+``minimize-lowrank`` with ``metric='low_rank'``) against sep-CMA-ES (pycma, ``CMA_diagonal=True``, sigma0 2, seed 1, with
 IPOP-free default stopping: a run that stops early leaves budget unused), at ``1000 n``
 evaluations (both stop at ``f_opt + 1e-8``), recording the fraction of the 11 targets ``f_opt + 10^k``, ``k = 2, 1, ..., -8``,
 reached, as ``docs/results/compare.md`` counts them.
@@ -76,6 +81,10 @@ BBOB_COLUMNS = [
 TARGETS = [10.0**k for k in range(2, -9, -1)]
 # pypop7's large-scale strategies (``pypop.py``), by arm name.
 PYPOP = ("lmcma", "lmmaes", "mmes", "vkdcma", "pysepcma")
+# The peers given the box [0, 1] as well: pycma's own bound handling (``bounds``), and for
+# pypop7's strategies, which take no box, the objective of the point projected onto it (the
+# repair ``minimize`` makes when given ``bounds``).
+BOXED = ("sepcma-box", *(f"{arm}-box" for arm in PYPOP))
 
 
 def reference(r: int) -> Vector:
@@ -176,11 +185,19 @@ class Outcome:
 
 
 # The options of each ``minimize`` arm on the texture task: none; the texels' box (which also
-# sets the start spread, a quarter of its width); the peers' one spread, without the box.
+# sets the start spread, a quarter of its width); the peers' one spread, without the box; the
+# low-rank-plus-diagonal metric.
 MINIMIZE_ARMS: dict[str, dict[str, object]] = {
     "minimize": {},
     "minimize-box": {"bounds": [(0.0, 1.0)]},
     "minimize-sigma": {"sigma0": 0.25},
+    "minimize-lowrank": {"metric": "low_rank"},
+}
+# The same on bbob-largescale, whose box is [-5, 5]^n.
+BBOB_MINIMIZE: dict[str, dict[str, object]] = {
+    "minimize": {},
+    "minimize-box": {"bounds": [(-5.0, 5.0)]},
+    "minimize-lowrank": {"metric": "low_rank"},
 }
 
 
@@ -229,12 +246,16 @@ def run_paper(task: Texture, x0: Vector, budget: int, seed: int, cap: float) -> 
     return Outcome({budget: value}, evaluations, time.perf_counter() - t0, capped)
 
 
-def run_sepcma(task: Texture, x0: Vector, budgets: list[int], seed: int, cap: float) -> Outcome:
+def run_sepcma(
+    task: Texture, x0: Vector, budgets: list[int], seed: int, cap: float, box: bool = False
+) -> Outcome:
     import cma
 
     rec = Recorder(budgets)
     t0 = time.perf_counter()
     opts = {"CMA_diagonal": True, "seed": seed + 1, "verbose": -9, "maxfevals": max(budgets)}
+    if box:
+        opts["bounds"] = [0.0, 1.0]
     es = cma.CMAEvolutionStrategy(x0, 0.25, opts)
     capped = False
     while not es.stop() and rec.evaluations < max(budgets):
@@ -242,7 +263,8 @@ def run_sepcma(task: Texture, x0: Vector, budgets: list[int], seed: int, cap: fl
             capped = True
             break
         xs = es.ask()
-        v = task.loss(np.asarray(xs))
+        # pycma's bound transform hands out points in the box; the clip only guards that.
+        v = task.loss(np.clip(np.asarray(xs), 0.0, 1.0) if box else np.asarray(xs))
         rec.see(v)
         es.tell(xs, v.tolist())
     return Outcome(rec.values(capped), rec.evaluations, time.perf_counter() - t0, capped)
@@ -328,31 +350,30 @@ def runs(
     """The runs of one arm for the budgets not yet measured, smallest first."""
     if arm in MINIMIZE_ARMS:
         yield run_minimize(task, x0, budgets, seed, cap, arm), budgets
-    elif arm == "sepcma":
-        yield run_sepcma(task, x0, budgets, seed, cap), budgets
+    elif arm in ("sepcma", "sepcma-box"):
+        yield run_sepcma(task, x0, budgets, seed, cap, arm == "sepcma-box"), budgets
     elif arm == "paper":
         for b in budgets:
             yield run_paper(task, x0, b, seed, cap), [b]
     elif arm == "image":
         for b in budgets:
             yield run_image(task, x0, b, seed, cap), [b]
-    elif arm in PYPOP:
+    elif arm in PYPOP or arm in BOXED:
         from studies.large_scale import pypop
 
         yield pypop.texture(arm, task, x0, budgets, seed, cap), budgets
     else:
-        raise ValueError(f"arm = {arm!r}: expected minimize, paper, sepcma, image or one of {PYPOP}")
+        raise ValueError(f"arm = {arm!r}: expected one of {list(MINIMIZE_ARMS)}, paper, sepcma, image, {PYPOP} or {BOXED}")
 
 
 def bbob_minimize(
-    problem: object, budget: int, target: float, cap: float, box: bool = False
+    problem: object, budget: int, target: float, cap: float, arm: str = "minimize"
 ) -> tuple[int, bool]:
     import plateau_free
 
     p: object = problem
     x0 = np.asarray(p.initial_solution, dtype=np.float64)  # type: ignore[attr-defined]
-    more = {"bounds": [(-5.0, 5.0)]} if box else {}
-    es = plateau_free.ask_tell(x0, budget=budget, seed=0, target=target, **more)
+    es = plateau_free.ask_tell(x0, budget=budget, seed=0, target=target, **BBOB_MINIMIZE[arm])
     t0, evaluations = time.perf_counter(), 0
     while not es.done:
         if time.perf_counter() - t0 > cap:
@@ -435,8 +456,8 @@ def bbob_run(suite: object, method: str, fid: int, n: int, inst: int, a: argpars
         from studies.large_scale import pypop
 
         evaluations, capped = pypop.bbob(method, p, 1000 * n, fopt + 1e-8, a.cap)
-    elif method in ("minimize", "minimize-box"):
-        evaluations, capped = bbob_minimize(p, 1000 * n, fopt + 1e-8, a.cap, method == "minimize-box")
+    elif method in BBOB_MINIMIZE:
+        evaluations, capped = bbob_minimize(p, 1000 * n, fopt + 1e-8, a.cap, method)
     else:
         evaluations, capped = bbob_sepcma(p, 1000 * n, fopt + 1e-8, a.cap)
     seconds = time.perf_counter() - t0
@@ -495,7 +516,7 @@ def main(argv: Optional[list[str]] = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     sub = ap.add_subparsers(dest="what", required=True)
     t = sub.add_parser("texture", help="the texture task")
-    t.add_argument("--n", default="768,3072,12288,49152")
+    t.add_argument("--n", default="768,3072,12288,49152,196608")
     t.add_argument("--budgets", default="1e4,1e5")
     t.add_argument("--seeds", default="0,1,2")
     t.add_argument("--arms", default="minimize,paper,sepcma,image")
