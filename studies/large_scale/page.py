@@ -43,9 +43,8 @@ ALL = {**ARMS, **PEERS}
 # The peers given the box [0, 1] (``run.py``'s ``BOXED``): the table of every arm given the box.
 BOXED = {"sepcma-box": "sep-CMA-ES (pycma, its `bounds`)"} | {f"{a}-box": label for a, label in PEERS.items()}
 LABELS = {**ALL, **BOXED}
-# The arms of the yardsticks' table, and its sizes.
+# The arms of the yardsticks' table and of the table of every arm given the box.
 YARDSTICK_ARMS = ["minimize", "minimize-box", "minimize-sigma", "sepcma", *PEERS]
-YARDSTICK_SIZES = SIZES
 BOXED_ARMS = ["minimize-box", *BOXED]
 Row = dict[str, str]
 
@@ -107,8 +106,8 @@ def cell_text(runs: list[Row]) -> tuple[str, float]:
 def in_grid(arm: str, n: int, budget: int) -> bool:
     """Whether ``scripts/large-scale`` runs this cell: 10^4 and 10^5 everywhere (the image
     method's 10^5 up to n = 3,072), 10^6 at n = 768 (not for the image method); ``minimize``
-    with sigma0 0.25 at n <= 3,072; pypop7's strategies at 10^4 at every size and at 10^5 up
-    to n = 12,288."""
+    with sigma0 0.25 at n <= 3,072; pypop7's strategies, with or without the box, at 10^4 at
+    every size and at 10^5 up to n = 12,288 (pycma's with the box as without)."""
     if arm in PEERS or arm in BOXED and arm != "sepcma-box":
         return budget == 10_000 or budget == 100_000 and n <= 12288
     if arm == "minimize-sigma" and n > 3072:
@@ -435,9 +434,9 @@ def bbob_missing(rows: list[Row]) -> list[str]:
     return out
 
 
-def as_minimize(rows: list[Row], arm: str) -> list[Row]:
-    """The runs of ``arm`` (an option of ``minimize``) as the variant tables take them."""
-    key = "arm" if rows and "arm" in rows[0] else "method"
+def as_minimize(rows: list[Row], arm: str, key: str = "arm") -> list[Row]:
+    """The runs of ``arm`` (an option of ``minimize``) as the variant tables take them; ``key``
+    is the column naming the arm (``method`` in the bbob csv files)."""
     return [{**r, key: "minimize"} for r in rows if r[key] == arm]
 
 
@@ -450,7 +449,7 @@ def main() -> None:
     png = os.path.splitext(page)[0] + ".png"
     plot(rows, png)
     table, missing = texture_table(rows, list(ARMS), SIZES)
-    yardsticks, missing_peers = texture_table(rows, YARDSTICK_ARMS, YARDSTICK_SIZES)
+    yardsticks, missing_peers = texture_table(rows, YARDSTICK_ARMS, SIZES)
     boxed, missing_boxed = texture_table(rows, BOXED_ARMS, SIZES)
     missing += [m for m in missing_peers + missing_boxed if m not in missing]
     template = open(os.path.join(os.path.dirname(__file__), "page.md")).read()
@@ -472,7 +471,7 @@ def main() -> None:
         "median success rule": read(sorted(glob.glob(os.path.join(out, "tried-msr-bbob*.csv")))),
         "TPA": read(sorted(glob.glob(os.path.join(out, "tried-tpa-bbob*.csv")))),
         "the warm-up without the two points after it": read(sorted(glob.glob(os.path.join(out, "tried-nopair-bbob*.csv")))),
-        "the low-rank-plus-diagonal metric (`metric='low_rank'`)": as_minimize(bbob, "minimize-lowrank"),
+        "the low-rank-plus-diagonal metric (`metric='low_rank'`)": as_minimize(bbob, "minimize-lowrank", "method"),
     }
     tried_bbob = {k: v for k, v in tried_bbob.items() if v}
     seeds_path = os.path.join(out, "tried-seeds-bbob.csv")
