@@ -18,8 +18,9 @@
 //! `2P + 1` evaluations. It is exact in expectation for every `f`, a plateau included: for the
 //! step `1[x > 0]`, `Q_sigma(x) = Phi(x / sigma)` and the estimate converges to its second
 //! derivative `-x / sigma^3 phi(x / sigma)` (`tests/hessian.rs`). Storage is `n^2`.
-//! No method of [`crate::minimize`] uses it yet (see `docs/convergence.md`); it is a building
-//! block for Newton or trust-region steps on the smoothed objective.
+//! No method of [`crate::minimize`] uses it: trust-region Newton steps built on this estimator
+//! lost to the adaptive search on the comparison's suite (`docs/convergence.md`, table 9),
+//! because a usable `n x n` estimate costs about `n^2` pairs.
 
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};

@@ -82,7 +82,7 @@ pub(crate) fn parse_args() -> Result<Args, String> {
             "--help" | "-h" => {
                 return Err(
                     "usage: compare [--quick] [--dims 2,5,10,20,100] [--seeds 5] \
-                     [--factor 1000] [--methods minimize,cmaes,cmaes-ipop,random,paper-loop] \
+                     [--factor 1000] [--methods minimize,cmaes,cmaes-ipop,random,paper-loop,smoothed-newton] \
                      [--functions sphere,...] [--out docs/results] [--rerun minimize] \
                      [--export FILE] [--peers FILE]"
                         .into(),

@@ -1,5 +1,6 @@
-//! The comparison of `plateau_free::minimize` with CMA-ES (the `cmaes` crate), random search and the
-//! paper's loop on shifted and rotated classic test functions.
+//! The comparison of `plateau_free::minimize` with CMA-ES (the `cmaes` crate), random search, the
+//! paper's loop and Newton steps on the smoothed objective (`newton.rs`), on shifted and rotated
+//! classic test functions.
 //!
 //! ```sh
 //! cargo run --release --example compare                 # the full run: docs/results/compare.{md,csv}
@@ -17,6 +18,7 @@
 mod args;
 mod functions;
 mod methods;
+mod newton;
 mod page;
 mod peers;
 mod variant;

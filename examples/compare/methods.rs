@@ -62,16 +62,19 @@ pub(crate) enum Method {
     CmaesIpop,
     /// Uniform random search in [-5, 5]^n, after x0.
     Random,
+    /// Trust-region Newton steps on the smoothed objective (`newton.rs`).
+    SmoothedNewton,
 }
 
 impl Method {
     /// Every method, in the page's order.
-    pub(crate) const ALL: [Method; 5] = [
+    pub(crate) const ALL: [Method; 6] = [
         Method::Minimize,
         Method::Cmaes,
         Method::CmaesIpop,
         Method::Random,
         Method::Paper,
+        Method::SmoothedNewton,
     ];
 
     /// The method's name on the command line and the page.
@@ -82,6 +85,7 @@ impl Method {
             Method::Cmaes => "cmaes",
             Method::CmaesIpop => "cmaes-ipop",
             Method::Random => "random",
+            Method::SmoothedNewton => "smoothed-newton",
         }
     }
 
@@ -148,6 +152,7 @@ impl Method {
                     r.run(|| |x: &cmaes::DVector<f64>| rec.eval(x.as_slice()));
                 }
             }
+            Method::SmoothedNewton => crate::newton::run(f, &p.x0, budget, seed),
             Method::Random => {
                 let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0xA5A5);
                 f(&p.x0);
