@@ -6,10 +6,9 @@
 //! `B` the metric below) and estimates from them, by Stein's identity in the whitened
 //! coordinates `u` (`x + B u`), the smoothed gradient `1/P sum (f+ - f-) / (2 sigma) eps` and
 //! the smoothed Hessian `1/(P - 1) sum (w_k - mean w) eps eps^T / sigma^2`, with
-//! `w = (f+ + f-) / 2 - f(x)`. That is the estimator of `plateau_free::hessian` with the
-//! batch's mean of `w` as control variate: with `f(x)` alone every `w` carries
-//! `sigma^2 tr(H) / 2`, whose noise hides the smaller curvatures. Both are mapped back to `x`;
-//! the Hessian is averaged over the last `max(10, n)` iterations.
+//! `w = (f+ + f-) / 2 - f(x)`: the estimator of `plateau_free::hessian`, whose control
+//! variate is the batch's mean of `w`, here in the metric. Both are mapped back to `x`; the
+//! Hessian is averaged over the last `max(10, n)` iterations.
 //!
 //! The step minimises `g^T d + d^T H d / 2` within the trust region `|B^-1 d| <= radius`
 //! (exactly, in the whitened Hessian's eigenbasis) and is taken when `f` falls by at least a
