@@ -125,7 +125,7 @@ pub(crate) fn write_outputs(
             Method::CmaesIpop => "the `cmaes` crate's IPOP restarts over [-5, 5]^n (population doubled per restart), the whole budget, `fun_target(1e-8)`",
             Method::Random => "uniform random points in [-5, 5]^n (after x0)",
             Method::Paper => "the paper's loop with the README's settings: N = 4 radial antithetic samples, Adam lr 0.02, `Annealer::paper(0.5, budget / 4)`",
-            Method::SmoothedNewton => "trust-region Newton steps on the smoothed objective (`examples/compare/newton.rs`): `max(n, 2)` antithetic pairs per step give the smoothed gradient and a Hessian estimate by Stein's identity, the Hessian averaged over the last `max(10, n)` steps, `sigma` equal to the trust radius (first 0.5); a measurement of the smoothed Hessian as curvature, not a method of the library",
+            Method::SmoothedNewton => "trust-region Newton steps on the smoothed objective (`examples/compare/newton.rs`): `max(n, 2)` antithetic pairs per step give the smoothed gradient and a Hessian estimate by Stein's identity, the Hessian averaged over the last `max(10, n)` steps, samples and trust region in a metric renewed from that Hessian, `sigma` equal to the trust radius (first 0.5), doubled on a plateau; a measurement of the smoothed Hessian as curvature (`docs/convergence.md`, table 9), not a method of the library",
         };
         writeln!(md, "- **{}**: {what}.", m.name()).unwrap();
     }
