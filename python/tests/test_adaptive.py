@@ -111,7 +111,7 @@ def test_metric_auto_is_full_up_to_200_and_diagonal_above():
 
 def test_metric_low_rank_learns_a_rotated_ellipsoid_the_diagonal_does_not():
     # As tests/low_rank.rs: n = 500, 200,000 evaluations (the directions need about 10^5 to
-    # grow); there the diagonal ends near 4 and the low rank near 0.02.
+    # grow); there the diagonal ends near 8 and the low rank near 0.01.
     f, x0 = long_axes_ellipsoid(500)
     diagonal, low_rank = (
         plateau_free.minimize(f, x0, budget=200_000, seed=0, batched=True, metric=m) for m in ("diagonal", "low_rank")

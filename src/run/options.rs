@@ -47,13 +47,14 @@ pub enum Metric {
     /// [`FULL_METRIC_LIMIT`] dimensions.
     Full,
     /// A diagonal covariance: per-coordinate spreads only, `O(n)` per evaluation (separable
-    /// CMA-ES, Ros and Hansen 2008, positive weights only). For large `n`; slow on rotated,
-    /// ill-conditioned functions.
+    /// CMA-ES, Ros and Hansen 2008: positive weights only, rates `(n + 2) / 3` times the full
+    /// metric's). For large `n`; slow on rotated, ill-conditioned functions.
     Diagonal,
     /// The diagonal covariance times a limited memory of directions (LM-MA-ES's matrix
     /// adaptation, Loshchilov, Glasmachers and Beyer 2019): `4 + 3 ln n` evolution paths of
     /// the selected steps stretch the draws along the search's recent progress, learning
     /// rotated structure a diagonal cannot, in `O(n ln n)` memory and time per evaluation.
+    /// The diagonal under them learns at the full metric's rates.
     LowRank,
 }
 

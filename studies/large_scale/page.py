@@ -339,7 +339,7 @@ SEED_LABELS = {
     "tpa": "two-point step-size adaptation",
     "guard": "TPA only where CSA agrees",
     "warm": "TPA warm-up, then CSA, no step back",
-    "start": "TPA warm-up, back to the start if it beat nothing, then CSA (default)",
+    "start": "TPA warm-up, back to the start if it beat nothing, then CSA; the full metric's rates",
     "nocov": "warm-up; the two points out of the covariance update",
     "rates": "warm-up; the two points out of the covariance update; sep-CMA-ES's rates",
     "wrates": "warm-up; sep-CMA-ES's rates",
@@ -347,6 +347,7 @@ SEED_LABELS = {
     "rates-start": "the default with the two points out of the covariance update and sep-CMA-ES's rates",
     "tpa-rates": "TPA and sep-CMA-ES's rates",
     "nopair": "the warm-up without the two points after it",
+    "default": "TPA warm-up, back to the start if it beat nothing, then CSA; sep-CMA-ES's rates (default)",
 }
 
 
@@ -475,7 +476,7 @@ def main() -> None:
     }
     tried_bbob = {k: v for k, v in tried_bbob.items() if v}
     seeds_path = os.path.join(out, "tried-seeds-bbob.csv")
-    seeds = read([seeds_path]) if os.path.exists(seeds_path) else []
+    seeds = read([p for p in (seeds_path, os.path.join(out, "seeds-bbob.csv")) if os.path.exists(p)])
     overhead_path = os.path.join(out, "overhead.csv")
     text = template.format(
         command=command,

@@ -271,8 +271,8 @@ impl SearchGaussian {
 
     /// A run at `mean` with spread `sigma` and a covariance `diag(scales^2)` to start with,
     /// full (learns any metric) or diagonal (learns per-coordinate scales only, `O(n)` per
-    /// sample: separable CMA-ES, Ros and Hansen, PPSN 2008, with its faster rates capped by
-    /// [`DIAGONAL_RATE_CAP`]).
+    /// sample: separable CMA-ES, Ros and Hansen, PPSN 2008, with its rates `(n + 2) / 3`
+    /// times the full metric's).
     pub fn new(
         mean: &[f64],
         sigma: f64,
@@ -287,9 +287,8 @@ impl SearchGaussian {
             let cov = DMatrix::from_diagonal(&d.map(|s| s * s));
             (p.c1, p.cmu, Some((cov, DMatrix::identity(n, n))))
         } else {
-            let k = ((n as f64 + 2.0) / 3.0).min(DIAGONAL_RATE_CAP);
-            let c1 = (p.c1 * k).min(0.5);
-            (c1, (p.cmu * k).min(1.0 - c1 - 1e-3).max(0.0), None)
+            let (c1, cmu) = diagonal_rates(&p, (n as f64 + 2.0) / 3.0);
+            (c1, cmu, None)
         };
         SearchGaussian {
             n,
@@ -319,10 +318,15 @@ impl SearchGaussian {
     }
 
     /// The same run with the low-rank-plus-diagonal metric ([`crate::run::Metric::LowRank`]): the
-    /// diagonal one and LM-MA-ES's directions (`lowrank.rs`). A full metric stays full.
+    /// diagonal one, at the full metric's rates, and LM-MA-ES's directions (`lowrank.rs`). A
+    /// full metric stays full.
     pub fn with_low_rank(mut self) -> SearchGaussian {
         if self.full.is_none() {
             self.low_rank = Some(LowRank::new(self.n, self.p.lambda));
+            // The diagonal under the directions learns at the full metric's rates: at separable
+            // CMA-ES's it takes up the stretch the directions should learn, and the rotated
+            // ellipsoid of tests/low_rank.rs ends far higher.
+            (self.c1, self.cmu) = diagonal_rates(&self.p, 1.0);
         }
         self
     }
@@ -553,7 +557,14 @@ impl SearchGaussian {
 
         // Covariance: rank-one, rank-mu and the active (negative) update.
         let (c1, cmu) = (self.c1, self.cmu);
-        let wsum: f64 = p.weights.iter().take(lambda).sum();
+        // The decay balances the weights the update uses: the diagonal one skips the negative
+        // weights, so counting them would inflate every variance by about `cmu` a generation.
+        let wsum: f64 = p
+            .weights
+            .iter()
+            .take(lambda)
+            .filter(|&&w| w > 0.0 || self.full.is_some())
+            .sum();
         let decay = 1.0 + c1 * (1.0 - hs) * cc * (2.0 - cc) - c1 - cmu * wsum;
         let mut terms = Vec::with_capacity(lambda);
         for (rank, &k) in order.iter().enumerate() {
@@ -650,10 +661,12 @@ impl SearchGaussian {
     }
 }
 
-/// The cap on the diagonal metric's learning-rate factor `(n + 2) / 3` of separable CMA-ES:
-/// 1, i.e. the full metric's rates. Uncapped, the diagonal run stalled with a collapsing spread
-/// on the large-n sphere and a 2-D ellipse of `tests/minimize.rs`.
-pub(crate) const DIAGONAL_RATE_CAP: f64 = 1.0;
+/// The diagonal metric's rank-one and rank-mu rates: the full metric's times `k`, kept below
+/// a decay of 1 (separable CMA-ES's bounds).
+fn diagonal_rates(p: &Params, k: f64) -> (f64, f64) {
+    let c1 = (p.c1 * k).min(0.5);
+    (c1, (p.cmu * k).min(1.0 - c1 - 1e-3).max(0.0))
+}
 
 /// A generator for a run's seed.
 pub(crate) fn rng(seed: u64) -> Xoshiro256PlusPlus {
