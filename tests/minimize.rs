@@ -202,8 +202,7 @@ fn large_dimension_uses_a_diagonal_metric() {
 fn the_diagonal_metric_learns_a_separable_ellipsoid_at_separable_cma_es_rates() {
     // Condition 1e6 along the axes at n = 320 (bbob's f2 without its rotation-free
     // oscillation): the scales must grow a thousandfold apart within 1000 n evaluations,
-    // which the full metric's rates, (n + 2) / 3 times slower, do not reach (the run ends
-    // near 6e3).
+    // which the full metric's rates, (n + 2) / 3 times slower, do not reach.
     let n = 320;
     let f = |x: &[f64]| {
         x.iter()

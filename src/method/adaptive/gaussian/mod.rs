@@ -557,26 +557,18 @@ impl SearchGaussian {
 
         // Covariance: rank-one, rank-mu and the active (negative) update.
         let (c1, cmu) = (self.c1, self.cmu);
-        // The decay balances the weights the update uses: the diagonal one skips the negative
-        // weights, so counting them would inflate every variance by about `cmu` a generation.
-        let wsum: f64 = p
-            .weights
-            .iter()
-            .take(lambda)
-            .filter(|&&w| w > 0.0 || self.full.is_some())
-            .sum();
+        // The active update's weights are sized for the full metric's rates; the diagonal one
+        // (rates (n + 2) / 3 times larger) uses positive weights only, as separable CMA-ES does
+        // (with them it lost positive definiteness on a 2-D rotated ellipse: tests/minimize.rs).
+        // The decay sums the weights used: counting skipped ones would inflate every variance.
+        let full = self.full.is_some();
+        let used = |w: f64| w > 0.0 || (w < 0.0 && full);
+        let wsum: f64 = p.weights.iter().take(lambda).filter(|&&w| used(w)).sum();
         let decay = 1.0 + c1 * (1.0 - hs) * cc * (2.0 - cc) - c1 - cmu * wsum;
         let mut terms = Vec::with_capacity(lambda);
         for (rank, &k) in order.iter().enumerate() {
             let mut w = p.weights[rank];
-            if w == 0.0 {
-                continue;
-            }
-            if w < 0.0 && self.full.is_none() {
-                // The active update's weights are sized for the full metric's rates; the
-                // diagonal one (rates (n + 2) / 3 times larger) uses positive weights only,
-                // as separable CMA-ES does (with them it lost positive definiteness on a 2-D
-                // rotated ellipse: tests/minimize.rs).
+            if !used(w) {
                 continue;
             }
             if w < 0.0 {
