@@ -510,7 +510,7 @@ fn messages_show_values_as_written() {
     );
 }
 
-/// `Metric::Full` above `FULL_METRIC_LIMIT` dimensions is refused before anything is
+/// `Metric::Full` (and `Metric::Decoded`) above `FULL_METRIC_LIMIT` dimensions is refused before anything is
 /// allocated (its n x n matrices would abort the process at n = 10^5), in a run and in
 /// ask/tell; at the limit, and with the other metrics far above it, the options pass.
 #[test]
@@ -525,21 +525,23 @@ fn the_full_metric_refuses_a_dimension_it_cannot_hold() {
         .unwrap_err();
     assert_eq!(
         e.to_string(),
-        "dimension = 100000 is invalid: above 10000 is too large for Metric::Full (it keeps n x n matrices); use Metric::Diagonal or Metric::Auto"
+        "dimension = 100000 is invalid: above 10000 is too large for Metric::Full and Metric::Decoded (they keep n x n matrices); use Metric::Diagonal or Metric::Auto"
     );
     assert!(e.to_string().contains(&FULL_METRIC_LIMIT.to_string()));
     let over = vec![0.0; FULL_METRIC_LIMIT + 1];
-    assert!(matches!(
-        Minimizer::new(f)
-            .metric(Metric::Full)
-            .ask_tell(&over)
-            .unwrap_err(),
-        Error::InvalidParameter {
-            name: "dimension",
-            value: ParameterValue::Integer(10_001),
-            ..
-        }
-    ));
+    for metric in [Metric::Full, Metric::Decoded] {
+        assert!(matches!(
+            Minimizer::new(f)
+                .metric(metric)
+                .ask_tell(&over)
+                .unwrap_err(),
+            Error::InvalidParameter {
+                name: "dimension",
+                value: ParameterValue::Integer(10_001),
+                ..
+            }
+        ));
+    }
     // The other metrics at n = 10^5, one evaluation: the start alone.
     for metric in [Metric::Auto, Metric::Diagonal] {
         let r = Minimizer::new(f)

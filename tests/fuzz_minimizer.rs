@@ -38,6 +38,7 @@ fn method() -> impl Strategy<Value = Method> {
     prop_oneof![
         Just(Method::Adaptive(Metric::Auto)),
         Just(Method::Adaptive(Metric::Full)),
+        Just(Method::Adaptive(Metric::Decoded)),
         Just(Method::Adaptive(Metric::Diagonal)),
         paper().prop_map(|(k, lr, sigma0)| Method::Paper {
             samples: 2 * k,
@@ -84,7 +85,9 @@ fn run_setting() -> impl Strategy<Value = Run> {
             |(method, (n, budget), start, seed, sigma0, bounds, target)| Run {
                 // A full metric needs n^2 numbers: fuzzed where that is cheap.
                 method: match method {
-                    Method::Adaptive(Metric::Full) if n > 4 => Method::Adaptive(Metric::Auto),
+                    Method::Adaptive(Metric::Full | Metric::Decoded) if n > 4 => {
+                        Method::Adaptive(Metric::Auto)
+                    }
                     m => m,
                 },
                 n,

@@ -5,26 +5,16 @@
 
 use plateau_free::{run::Metric, Minimizer};
 
+mod common;
+use common::{dot, orthonormal};
+
 /// Three orthonormal dense vectors of `n` (a fixed sequence, Gram-Schmidt).
 fn long_axes(n: usize) -> Vec<Vec<f64>> {
-    let mut axes: Vec<Vec<f64>> = Vec::new();
-    for k in 0..3 {
-        let mut v: Vec<f64> = (0..n)
+    orthonormal((0..3).map(|k| {
+        (0..n)
             .map(|i| ((i * (2 * k + 3) + k) % 17) as f64 - 8.0)
-            .collect();
-        for a in &axes {
-            let d = dot(&v, a);
-            v.iter_mut().zip(a).for_each(|(x, y)| *x -= d * y);
-        }
-        let norm = dot(&v, &v).sqrt();
-        v.iter_mut().for_each(|x| *x /= norm);
-        axes.push(v);
-    }
-    axes
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+            .collect()
+    }))
 }
 
 #[test]

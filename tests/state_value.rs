@@ -3,7 +3,11 @@
 //! dropped and read back, goes on bit for bit as the uninterrupted run.
 #![cfg(feature = "serde")]
 
-use plateau_free::{objective::NoObjective, run::Strategy, AskTell, Minimizer, Minimum};
+use plateau_free::{
+    objective::NoObjective,
+    run::{Metric, Strategy},
+    AskTell, Minimizer, Minimum,
+};
 
 /// A staircase with a plateau around the start: flat almost everywhere.
 fn f(x: &[f64]) -> f64 {
@@ -33,6 +37,13 @@ fn methods() -> Vec<(&'static str, Minimizer<NoObjective>)> {
                 .seed(6)
                 .bounds(vec![-2.0, -1.0, -1.0], vec![2.0, 3.0, 0.5])
                 .target(f64::NEG_INFINITY),
+        ),
+        (
+            "adaptive-decoded",
+            Minimizer::without_objective()
+                .budget(300)
+                .seed(9)
+                .metric(Metric::Decoded),
         ),
         (
             "paper",

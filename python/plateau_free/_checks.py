@@ -123,11 +123,11 @@ def _sampling(name: str, value: Any) -> str:
     return spelt
 
 
-_METRICS = ("auto", "full", "diagonal", "low_rank")
+_METRICS = ("auto", "full", "decoded", "diagonal", "low_rank")
 
 
 def _metric(name: str, value: Any) -> str:
-    must = f"{name} = {_show(value)} is not a metric: use 'auto', 'full', 'diagonal' or 'low_rank'"
+    must = f"{name} = {_show(value)} is not a metric: use 'auto', 'full', 'decoded', 'diagonal' or 'low_rank'"
     if not isinstance(value, str):
         raise OptionTypeError(must)
     spelt = value.lower().replace("-", "_").replace(" ", "_")  # a Metric's value

@@ -215,9 +215,13 @@ _OPTIONS: dict[str, _Option] = {
         at least 2); each restart doubles it."""),
     "metric": _row(_metric, _SEARCH, "str, optional", """
         Adaptive, polished: the metric the search distribution learns (``Metric``):
-        ``'auto'`` (default: ``'full'`` up to n = 200, ``'diagonal'`` above), ``'full'`` (a
+        ``'auto'`` (default: ``'full'`` up to n = 40, ``'decoded'`` from 41 to 200,
+        ``'diagonal'`` above), ``'full'`` (a
         covariance: rotated, ill-conditioned functions; ``O(n^2)`` per evaluation, refused
-        above n = 10,000), ``'diagonal'`` (one spread per coordinate, ``O(n)``) or
+        above n = 10,000), ``'decoded'`` (the full covariance decoded by a diagonal one
+        learned much faster, dd-CMA-ES: axis-parallel scales about as fast as ``'diagonal'``,
+        rotated structure as ``'full'``; the full metric's cost and limit), ``'diagonal'``
+        (one spread per coordinate, ``O(n)``) or
         ``'low_rank'`` (the diagonal times ``4 + 3 ln n`` directions of recent progress,
         LM-MA-ES's limited memory: rotated structure at ``O(n ln n)``; measured in
         docs/results/large-scale.md)."""),
@@ -381,14 +385,18 @@ def _refuse_foreign(method: str, given: dict[str, Any], where: str) -> None:
     takes = _takes(method, where)
     foreign = [name for name in given if name not in takes]
     if foreign:
-        default = " (the default method)" if method == "adaptive" else ""
-        raise ValueError(
-            "; ".join(
-                f"{name} = {_show(given[name])}: not an option of method={method!r}{default}, "
-                f"an option of method={_owners(name)}"
-                for name in foreign
-            )
-        )
+        raise ValueError("; ".join(_foreign(name, given[name], method, where) for name in foreign))
+
+
+def _foreign(name: str, value: Any, method: str, where: str) -> str:
+    """Why ``method`` in ``where`` does not take option ``name``: another method's option, or
+    one of ``minimize`` alone (it drives the run, which the caller of ask and tell does)."""
+    if method in _OPTIONS[name].methods:
+        return (f"{name} = {_show(value)}: not an option of ask_tell, an option of minimize "
+                "(with ask and tell the caller runs the evaluations)")
+    default = " (the default method)" if method == "adaptive" else ""
+    return (f"{name} = {_show(value)}: not an option of method={method!r}{default}, "
+            f"an option of method={_owners(name)}")
 
 
 def _check_call(

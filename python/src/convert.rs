@@ -240,7 +240,7 @@ pub(crate) struct AdaptiveOptions {
     bounds: Option<Bounds>,
     target: Option<f64>,
     population: Option<usize>,
-    /// `Minimizer::metric`: `'auto'`, `'full'`, `'diagonal'` or `'low_rank'`.
+    /// `Minimizer::metric`: `'auto'`, `'full'`, `'decoded'`, `'diagonal'` or `'low_rank'`.
     metric: PyMetric,
     restarts: bool,
     /// `method='polished'`: `Strategy::Paper`'s `(samples, lr, sigma0)`; None for the
@@ -304,10 +304,11 @@ impl FromPyObject<'_, '_> for PyMetric {
         match name.as_str() {
             "auto" => Ok(PyMetric(Metric::Auto)),
             "full" => Ok(PyMetric(Metric::Full)),
+            "decoded" => Ok(PyMetric(Metric::Decoded)),
             "diagonal" => Ok(PyMetric(Metric::Diagonal)),
             "low_rank" => Ok(PyMetric(Metric::LowRank)),
             _ => Err(PyValueError::new_err(format!(
-                "metric = '{name}' is not a metric: use 'auto', 'full', 'diagonal' or 'low_rank'"
+                "metric = '{name}' is not a metric: use 'auto', 'full', 'decoded', 'diagonal' or 'low_rank'"
             ))),
         }
     }

@@ -100,12 +100,13 @@ def long_axes_ellipsoid(n):
     return f, 1.0 + ((np.arange(n) * 7) % 11) / 11.0
 
 
-def test_metric_auto_is_full_up_to_200_and_diagonal_above():
-    for n, same_as in [(6, "full"), (200, "full"), (201, "diagonal")]:
+def test_metric_auto_is_full_up_to_40_decoded_up_to_200_and_diagonal_above():
+    other_of = {"full": "decoded", "decoded": "full", "diagonal": "low_rank"}
+    for n, same_as in [(6, "full"), (40, "full"), (41, "decoded"), (200, "decoded"), (201, "diagonal")]:
         f, x0 = long_axes_ellipsoid(n)
         runs = [plateau_free.minimize(f, x0, budget=3000, seed=1, batched=True, metric=m) for m in ("auto", same_as)]
         assert np.array_equal(runs[0].x, runs[1].x) and runs[0].fun == runs[1].fun
-        other = "diagonal" if same_as == "full" else "low_rank"
+        other = other_of[same_as]
         assert plateau_free.minimize(f, x0, budget=3000, seed=1, batched=True, metric=other).fun != runs[0].fun
 
 

@@ -194,6 +194,9 @@ def test_bad_options_are_value_errors():
         plateau_free.ask_tell([1.0], budget=10, method="adaptive", lr=0.1)
     with pytest.raises(ValueError, match="samples = 4: not an option of method='adaptive'"):
         plateau_free.ask_tell([1.0], samples=4)  # never a silent switch to the paper's loop
+    # An option of minimize alone is named as such, not as another method's.
+    with pytest.raises(ValueError, match=r"^disp = True: not an option of ask_tell, an option of minimize \("):
+        plateau_free.ask_tell([1.0], budget=10, disp=True)
     with pytest.raises(ValueError, match="minimize's alone"):
         plateau_free.ask_tell([1.0], budget=10, method="fd")
     with pytest.raises(ValueError, match="on_failure = 'skip' is not a policy"):

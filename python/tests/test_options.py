@@ -127,7 +127,7 @@ BAD = [
     (dict(population=1), "population = 1 is invalid: must be at least 2"),
     (dict(population=4.5), "population = 4.5 must be a whole number, not negative and at most 18446744073709551615"),
     (dict(restarts="yes"), "restarts = 'yes' must be True or False"),
-    (dict(metric="sparse"), "metric = 'sparse' is not a metric: use 'auto', 'full', 'diagonal' or 'low_rank'"),
+    (dict(metric="sparse"), "metric = 'sparse' is not a metric: use 'auto', 'full', 'decoded', 'diagonal' or 'low_rank'"),
     (dict(metric=2), "metric = 2 is not a metric"),
     (dict(on_failure="ignore"), "on_failure = 'ignore' is not a policy: use 'continue' or 'raise'"),
     (dict(on_failure=True), "on_failure = True is not a policy"),

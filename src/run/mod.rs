@@ -26,8 +26,8 @@ pub(crate) use minimum::{Best, Ledger};
 pub use minimum::{Minimum, Stop};
 pub(crate) use options::Options;
 pub use options::{
-    FailurePolicy, Metric, Strategy, DEFAULT_PATIENCE, DEFAULT_POLISH, FULL_METRIC_LIMIT,
-    FULL_METRIC_MAX_DIM,
+    FailurePolicy, Metric, Strategy, DECODING_MIN_DIM, DEFAULT_PATIENCE, DEFAULT_POLISH,
+    FULL_METRIC_LIMIT, FULL_METRIC_MAX_DIM,
 };
 pub(crate) use stall::check_fraction;
 pub use stall::{Stall, STALL_WINDOW};

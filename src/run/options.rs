@@ -39,7 +39,8 @@ pub enum Strategy {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Metric {
-    /// Full up to `n = 200`, diagonal above (the default).
+    /// The default: [`Metric::Full`] up to `n = 40`, [`Metric::Decoded`] from 41 to 200
+    /// ([`DECODING_MIN_DIM`], [`FULL_METRIC_MAX_DIM`]), [`Metric::Diagonal`] above.
     #[default]
     Auto,
     /// A full covariance: learns rotated, ill-conditioned metrics; `O(n^2)` per evaluation
@@ -56,6 +57,13 @@ pub enum Metric {
     /// rotated structure a diagonal cannot, in `O(n ln n)` memory and time per evaluation.
     /// The diagonal under them learns at the full metric's rates.
     LowRank,
+    /// The full covariance decoded by a diagonal one learned much faster (dd-CMA-ES: Akimoto
+    /// and Hansen, Evolutionary Computation 28(3), 2020): the covariance is `D C D`, `C` as
+    /// [`Metric::Full`] learns it and `D` at rates of order `n^-0.75`, slowed while `C` is far
+    /// from a multiple of the identity. Learns axis-parallel scales about as fast as
+    /// [`Metric::Diagonal`] and rotated structure as [`Metric::Full`] does; costs as much as
+    /// the full metric. Refused above [`FULL_METRIC_LIMIT`] dimensions.
+    Decoded,
 }
 
 /// What a run does with an evaluation that failed: a NaN or infinite value (or, in the
@@ -83,6 +91,14 @@ pub const DEFAULT_PATIENCE: usize = 1;
 
 /// The largest dimension for which [`Metric::Auto`] learns a full covariance.
 pub const FULL_METRIC_MAX_DIM: usize = 200;
+
+/// The smallest dimension at which [`Metric::Auto`] decodes its full covariance by a diagonal
+/// one ([`Metric::Decoded`]). Below it the full metric's own rates learn the scales within
+/// the usual budgets, and on COCO's bbob at n = 5 the faster scales cost multimodal functions
+/// targets; from about n = 40 on, the plain full metric cannot learn an axis-parallel
+/// ellipsoid of condition 1e6 within `1000 n` evaluations (docs/convergence.md, "Diagonal
+/// decoding").
+pub const DECODING_MIN_DIM: usize = 41;
 
 /// The largest dimension [`Metric::Full`] accepts. The full metric keeps `n x n` matrices
 /// (the covariance and its eigenvectors: 1.6 GB at this size) and decomposes one every few
@@ -189,11 +205,11 @@ impl Options {
         if let Some(s) = self.sigma0 {
             check::positive("sigma0", s)?;
         }
-        if self.metric == Metric::Full && n > FULL_METRIC_LIMIT {
+        if matches!(self.metric, Metric::Full | Metric::Decoded) && n > FULL_METRIC_LIMIT {
             return Err(Error::InvalidParameter {
                 name: "dimension",
                 value: n.into(),
-                reason: "above 10000 is too large for Metric::Full (it keeps n x n matrices); use Metric::Diagonal or Metric::Auto",
+                reason: "above 10000 is too large for Metric::Full and Metric::Decoded (they keep n x n matrices); use Metric::Diagonal or Metric::Auto",
             });
         }
         if let Some(t) = self.target {

@@ -206,13 +206,14 @@ def main() -> None:
     p = sub.add_parser("page", help="write the page from the runs")
     p.add_argument("--runs", default=DEFAULT_RUNS)
     p.add_argument("--page", default="docs/results/coco.md")
+    p.add_argument("--made-by", help="the commands of a page of a part of the grid, stated on it")
     a = parser.parse_args()
     if a.command == "run":
         run_main(a)
     else:
         from studies.coco.page import write_page
 
-        write_page(Path(a.runs), Path(a.page))
+        write_page(Path(a.runs), Path(a.page), a.made_by)
 
 
 if __name__ == "__main__":

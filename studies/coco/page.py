@@ -160,10 +160,14 @@ def subset_section(solver: str, runs: list[dict[str, Any]]) -> list[str]:
     return lines
 
 
-def write_page(runs_dir: Path, page: Path) -> None:
+def write_page(runs_dir: Path, page: Path, made_by: str | None = None) -> None:
+    """The page of the runs in ``runs_dir``; ``made_by``, the commands of a page of a part of
+    the grid, is stated under its title."""
     runs = [json.loads(line) for line in (runs_dir / "runs.jsonl").read_text().splitlines()]
     grid = [r for r in runs if r["solver"] not in SUBSET_SOLVERS]
     lines = INTRO.splitlines()
+    if made_by:
+        lines[1:1] = ["", f"This page's runs and the page itself: {made_by}."]
     for name in ("bbob-mixint", "bbob"):
         mine = [r for r in grid if r["suite"] == name]
         lines += instance_sections(name, mine)

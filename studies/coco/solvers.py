@@ -42,12 +42,17 @@ class Box:
         return 0.2 * mean, widths / mean
 
 
-def minimize_box(f: Callable, box: Box) -> None:
+def minimize_box(f: Callable, box: Box, **options: object) -> None:
     """``plateau_free.minimize`` with the box, nothing declared."""
     import plateau_free
 
     plateau_free.minimize(f, box.x0, bounds=list(zip(box.lower, box.upper)), budget=box.budget,
-                          seed=box.seed, target=box.target)
+                          seed=box.seed, target=box.target, **options)
+
+
+def minimize_box_decoded(f: Callable, box: Box) -> None:
+    """``minimize_box`` with the diagonally decoded full metric (``metric='decoded'``)."""
+    minimize_box(f, box, metric="decoded")
 
 
 def minimize_int(f: Callable, box: Box) -> None:
@@ -163,6 +168,7 @@ def random_search(f: Callable, box: Box) -> None:
 SOLVERS: dict[str, tuple[Callable[[Callable, Box], None], str]] = {
     "minimize-int": (minimize_int, "`minimize` with the box and `integrality=`"),
     "minimize-box": (minimize_box, "`minimize` with the box"),
+    "minimize-box-decoded": (minimize_box_decoded, "`minimize` with the box and `metric='decoded'`"),
     "minimize": (minimize_plain, "`minimize(f, x0, budget=, seed=)`"),
     "pycma-int": (pycma_int, "pycma BIPOP-CMA-ES, the box and `integer_variables`"),
     "pycma-box": (pycma_box, "pycma BIPOP-CMA-ES, the box"),

@@ -22,6 +22,27 @@ pub fn tilted_2d(x: &[f64]) -> f64 {
     }
 }
 
+/// `a . b`.
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// `vectors` made orthonormal in their order (Gram-Schmidt): dense axes for rotated test
+/// functions, the same for every run.
+pub fn orthonormal(vectors: impl IntoIterator<Item = Vec<f64>>) -> Vec<Vec<f64>> {
+    let mut axes: Vec<Vec<f64>> = Vec::new();
+    for mut v in vectors {
+        for a in &axes {
+            let d = dot(&v, a);
+            v.iter_mut().zip(a).for_each(|(x, y)| *x -= d * y);
+        }
+        let norm = dot(&v, &v).sqrt();
+        v.iter_mut().for_each(|x| *x /= norm);
+        axes.push(v);
+    }
+    axes
+}
+
 /// The exact bit patterns of `v`, for comparisons that must hold bit for bit (`-0.0` and
 /// `0.0` differ, and a NaN equals itself).
 pub fn bits(v: &[f64]) -> Vec<u64> {

@@ -20,7 +20,9 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 
 use crate::error::Error;
 use crate::objective::Points;
-use crate::run::{Ask, Ledger, Metric, Minimum, Options, Stall, Stop, FULL_METRIC_MAX_DIM};
+use crate::run::{
+    Ask, Ledger, Metric, Minimum, Options, Stall, Stop, DECODING_MIN_DIM, FULL_METRIC_MAX_DIM,
+};
 use gaussian::{floors, rng, Params, SearchGaussian};
 use repeats::Repeats;
 
@@ -34,6 +36,9 @@ pub(crate) struct Adaptive {
     /// The low-rank-plus-diagonal metric ([`Metric::LowRank`]).
     #[cfg_attr(feature = "serde", serde(default))]
     low_rank: bool,
+    /// The full metric diagonally decoded ([`Metric::Decoded`]).
+    #[cfg_attr(feature = "serde", serde(default))]
+    decoded: bool,
     lambda: usize,
     /// Where a run starts, in the search's space (the box's points unfolded: `fold.rs`).
     start: Vec<f64>,
@@ -69,7 +74,7 @@ impl Adaptive {
         let n = x0.len();
         let (sigma0, scales) = start_spread(o, x0);
         let full = match o.metric {
-            Metric::Full => true,
+            Metric::Full | Metric::Decoded => true,
             Metric::Diagonal | Metric::LowRank => false,
             Metric::Auto => n <= FULL_METRIC_MAX_DIM,
         };
@@ -79,6 +84,11 @@ impl Adaptive {
             scales,
             full,
             low_rank: o.metric == Metric::LowRank,
+            decoded: match o.metric {
+                Metric::Decoded => true,
+                Metric::Auto => (DECODING_MIN_DIM..=FULL_METRIC_MAX_DIM).contains(&n),
+                _ => false,
+            },
             lambda: o.population.unwrap_or_else(|| Params::default_lambda(n)),
             start: fold::unfold_discrete(x0, o),
             origin: fold::unfold_discrete(x0, o),
@@ -177,6 +187,9 @@ impl Adaptive {
             );
             if self.low_rank {
                 dist = dist.with_low_rank();
+            }
+            if self.decoded {
+                dist = dist.with_decoding();
             }
             dist.mirrored = o.mirrored;
             dist.flat_growth = o.flat_growth;

@@ -118,7 +118,7 @@ impl SearchGaussian {
 
     pub(super) fn check_end(&self, flat: bool, best: f64, worst: f64) -> Option<RunEnd> {
         let n = self.n;
-        let max_d = self.d.max();
+        let max_d = self.d.max() * self.decoding_range().0;
         let diag_max = (0..n).map(|i| self.variance(i)).fold(0.0, f64::max).sqrt();
         if self.sigma * max_d > 1e8 * self.sigma_start {
             return Some(RunEnd::Flat);

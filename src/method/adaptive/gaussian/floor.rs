@@ -65,13 +65,18 @@ impl SearchGaussian {
         if !raised {
             return;
         }
-        match &mut self.full {
-            Some((cov, _)) => {
+        match (&mut self.full, &mut self.decoding) {
+            (Some(_), Some(decoding)) => decoding
+                .scale
+                .iter_mut()
+                .zip(&scale)
+                .for_each(|(d, s)| *d *= s),
+            (Some((cov, _)), None) => {
                 let d = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(scale));
                 *cov = &d * &*cov * &d;
                 self.decompose();
             }
-            None => self.d.iter_mut().zip(&scale).for_each(|(d, s)| *d *= s),
+            (None, _) => self.d.iter_mut().zip(&scale).for_each(|(d, s)| *d *= s),
         }
     }
 
@@ -81,7 +86,9 @@ impl SearchGaussian {
     /// continuous coordinates' block (a block of one coordinate has none: the whole matrix
     /// is tested then); the block is computed only when the whole matrix passes `limit`.
     pub(super) fn condition(&self, limit: f64) -> f64 {
-        let whole = (self.d.max() / self.d.min()).powi(2);
+        // With diagonal decoding, cond(D C D) <= cond(D) cond(C): a bound, not the value.
+        let (hi, lo) = self.decoding_range();
+        let whole = (self.d.max() / self.d.min() * hi / lo).powi(2);
         if whole <= limit || self.floors.is_empty() {
             return whole;
         }
@@ -92,7 +99,11 @@ impl SearchGaussian {
         let (largest, smallest) = match &self.full {
             Some((cov, _)) => {
                 let k = continuous.len();
-                let block = DMatrix::from_fn(k, k, |a, b| cov[(continuous[a], continuous[b])]);
+                let scale = |i: usize| self.decoding.as_ref().map_or(1.0, |dd| dd.scale[i]);
+                let block = DMatrix::from_fn(k, k, |a, b| {
+                    let (i, j) = (continuous[a], continuous[b]);
+                    scale(i) * cov[(i, j)] * scale(j)
+                });
                 let e = block.symmetric_eigenvalues();
                 (e.max(), e.min())
             }

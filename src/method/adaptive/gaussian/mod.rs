@@ -45,13 +45,17 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
+mod decoding;
 mod ends;
 mod floor;
 mod lowrank;
+mod tpa;
 
+use decoding::Decoding;
 pub(crate) use ends::RunEnd;
 pub(crate) use floor::floors;
 use lowrank::LowRank;
+use tpa::Tpa;
 
 /// The strategy parameters for a dimension and population size (Hansen 2016, Table 1).
 #[derive(Debug, Clone)]
@@ -137,7 +141,7 @@ pub(crate) struct SearchGaussian {
     pub sigma: f64,
     sigma_start: f64,
     /// The full covariance and its eigenvectors (columns), or `None` for a diagonal one
-    /// (whose variances are `d^2`).
+    /// (whose variances are `d^2`). With diagonal decoding it is `C` of `D C D`.
     full: Option<(DMatrix<f64>, DMatrix<f64>)>,
     /// The learning rates of the covariance (scaled up for a diagonal one).
     c1: f64,
@@ -181,47 +185,19 @@ pub(crate) struct SearchGaussian {
     /// coordinates of [`crate::Minimizer::steps`], empty when there are none.
     #[cfg_attr(feature = "serde", serde(default))]
     pub floors: Vec<f64>,
+    /// The full metric's diagonal decoding (`decoding.rs`): the covariance is `D C D`;
+    /// `None` for a plain full metric (and for the others).
+    #[cfg_attr(feature = "serde", serde(default))]
+    decoding: Option<Decoding>,
 }
 
-/// A warm-up of two-point step-size adaptation (TPA: Hansen, "CMA-ES with Two-Point Step-Size
-/// Adaptation", INRIA RR-6527, 2008; its damping as pycma 4.5 sets it) at the start of each run
-/// with the diagonal metric, before cumulative step-size adaptation (CSA) takes over.
-///
-/// Why: CSA moves `ln sigma` by at most `c_sigma / d_sigma ~ mueff / n` per generation, so at
-/// n = 49,152 one e-fold costs ~145,000 evaluations and a start spread ten times too wide is
-/// never corrected within 10^5 (docs/results/large-scale.md). TPA draws the first two points
-/// of each generation at `m +- sigma * l * dm / |dm|_C`, along the last mean shift `dm` with
-/// the Mahalanobis length `l` of an ordinary draw, and shrinks `sigma` when the backward point
-/// ranks better (the last step overshot), grows it when the forward one does; its damping is
-/// `O(ln n)` generations per e-fold, not `O(n / mueff)`. But TPA throughout (and CSA only
-/// accelerated where both rules agreed) shrank `sigma` onto Rastrigin's local basins at
-/// n = 320 and lost its target, as the median success rule had. So TPA only shrinks a spread
-/// that is too large: the first generation in which its smoothed rank difference turns
-/// positive (the forward point better: `sigma` no longer too large) ends the warm-up for the
-/// rest of the run, and CSA, whose slowness keeps `sigma` wide on multimodal functions, goes
-/// on from there. The two points stay in every generation: without them after the warm-up
-/// (measured at n = 3,072, seed 0) the texture task ends at 7.1e-5 instead of 9.7e-7 with
-/// 10^5 evaluations; with them, separable and Rosenbrock-like functions at n = 320 (bbob f2,
-/// f8, f10) end higher than under CSA alone (docs/results/large-scale.md).
-#[derive(Debug, Clone, Default)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub(crate) struct Tpa {
-    /// The smoothed rank difference, in `[-1, 1]`.
-    s: f64,
-    /// The last mean shift, when the next generation is to open with the two points along
-    /// it (none in a run's first generation, or after a mean that did not move).
-    shift: Option<DVector<f64>>,
-    /// The warm-up has ended: `sigma` follows CSA for the rest of the run.
-    #[cfg_attr(feature = "serde", serde(default))]
-    warmed: bool,
-    /// The warm-up ended with the last update, until [`SearchGaussian::warm_up_ended`] reads
-    /// it.
-    #[cfg_attr(feature = "serde", serde(default))]
-    ended: bool,
+/// What a generation's update reads with diagonal decoding ([`SearchGaussian::decode`]).
+struct Decoded {
+    white_path: DVector<f64>,
+    white_selected: Vec<(f64, DVector<f64>)>,
+    pc: DVector<f64>,
+    ys: Vec<DVector<f64>>,
 }
-
-/// TPA's smoothing weight of the newest rank difference.
-const TPA_C: f64 = 0.3;
 
 /// One generation's draws: `ys` are the offsets `y_k` (so that `x_k = m + sigma y_k`).
 pub(crate) struct Generation {
@@ -247,6 +223,9 @@ impl SearchGaussian {
         }
         if let Some(low_rank) = &self.low_rank {
             low_rank.check(n)?;
+        }
+        if let Some(decoding) = &self.decoding {
+            decoding.check(n)?;
         }
         if !self.floors.is_empty() {
             len("search floors", self.floors.len(), n)?;
@@ -314,7 +293,21 @@ impl SearchGaussian {
             ties: false,
             low_rank: None,
             floors: Vec::new(),
+            decoding: None,
         }
+    }
+
+    /// The same run with the full metric diagonally decoded ([`crate::run::Metric::Decoded`],
+    /// `decoding.rs`): the start scales become `D` and `C` the identity. A diagonal metric
+    /// stays as it is.
+    pub fn with_decoding(mut self) -> SearchGaussian {
+        if let Some((cov, b)) = &mut self.full {
+            self.decoding = Some(Decoding::new(&self.d, &self.p));
+            *cov = DMatrix::identity(self.n, self.n);
+            *b = DMatrix::identity(self.n, self.n);
+            self.d.fill(1.0);
+        }
+        self
     }
 
     /// The same run with the low-rank-plus-diagonal metric ([`crate::run::Metric::LowRank`]): the
@@ -329,20 +322,6 @@ impl SearchGaussian {
             (self.c1, self.cmu) = diagonal_rates(&self.p, 1.0);
         }
         self
-    }
-
-    /// Whether the run draws TPA's two points and starts with its warm-up (the diagonal
-    /// metric; the full one, n <= 200 by default, keeps CSA alone, bit for bit).
-    fn uses_tpa(&self) -> bool {
-        self.full.is_none() && self.p.lambda >= 4
-    }
-
-    /// TPA's damping: `0.7 + 2 ln n`, more when the population exceeds the dimension
-    /// (pycma's setting for its TPA: an e-fold of `sigma` in about 22 generations at
-    /// n = 49,152).
-    fn tpa_damping(&self) -> f64 {
-        let (nf, lf) = (self.n as f64, self.p.lambda as f64);
-        0.7 + 2.0 * nf.ln().max(0.0) + 2.0 * (lf - nf).max(1.0).ln()
     }
 
     /// Draws a generation's offsets.
@@ -378,67 +357,13 @@ impl SearchGaussian {
                 let v: f64 = StandardNormal.sample(rng);
                 v * self.d[i]
             });
-            match &self.full {
-                Some((_, b)) => ys.push(b * z),
-                None => ys.push(z),
+            match (&self.full, &self.decoding) {
+                (Some((_, b)), Some(decoding)) => ys.push((b * z).component_mul(&decoding.scale)),
+                (Some((_, b)), None) => ys.push(b * z),
+                (None, _) => ys.push(z),
             }
         }
         Generation { ys }
-    }
-
-    /// The unit (in the metric's norm) direction of the last mean shift, when this
-    /// generation opens with TPA's two points.
-    fn tpa_pair(&self) -> Option<DVector<f64>> {
-        if !self.uses_tpa() {
-            return None;
-        }
-        let shift = self.tpa.shift.as_ref()?;
-        let len = self.inv_sqrt(shift).norm();
-        (len > 0.0 && len.is_finite()).then(|| shift / len)
-    }
-
-    /// TPA's update of `sigma` from a generation that opened with its two points: the rank
-    /// difference `z` of the backward and the forward point over `lambda - 1` (positive when
-    /// the forward one is better), smoothed as `sign(z) sqrt(|z|)` (which enlarges small
-    /// differences, as pycma does with large populations).
-    fn tpa_step(&mut self, values: &[f64]) -> f64 {
-        let lambda = values.len();
-        let below = |v: f64| values.iter().filter(|&&w| w < v).count() as f64;
-        let z = (below(values[1]) - below(values[0])) / (lambda - 1) as f64;
-        self.tpa.s = (1.0 - TPA_C) * self.tpa.s + TPA_C * z.signum() * z.abs().sqrt();
-        self.tpa.s / self.tpa_damping()
-    }
-
-    /// The change of `ln sigma` after a generation: TPA's while the warm-up lasts, CSA's
-    /// (`csa`) after it and with the full metric. Keeps the mean shift `yw` (in units of
-    /// sigma) for the next generation's two points.
-    fn log_step(&mut self, csa: f64, paired: bool, values: &[f64], yw: DVector<f64>) -> f64 {
-        if !self.uses_tpa() {
-            return csa;
-        }
-        let tpa = if paired && values.len() == self.p.lambda {
-            self.tpa_step(values)
-        } else {
-            0.0
-        };
-        self.tpa.shift = Some(yw);
-        // The warm-up ends for good the first time the forward point ranks better on
-        // average: sigma is no longer too large, and CSA, slower, keeps it wide on
-        // multimodal functions from there on (TPA alone lost Rastrigin's target).
-        if self.tpa.s > 0.0 && !self.tpa.warmed {
-            self.tpa.warmed = true;
-            self.tpa.ended = true;
-        }
-        if self.tpa.warmed {
-            csa
-        } else {
-            tpa
-        }
-    }
-
-    /// Whether the warm-up ended with the last update (true once).
-    pub fn warm_up_ended(&mut self) -> bool {
-        std::mem::take(&mut self.tpa.ended)
     }
 
     /// Moves the mean to `x` with the spread and scales learned so far; the evolution paths
@@ -448,6 +373,9 @@ impl SearchGaussian {
         self.ps.fill(0.0);
         self.pc.fill(0.0);
         self.tpa.shift = None;
+        if let Some(decoding) = &mut self.decoding {
+            decoding.clear_path();
+        }
     }
 
     /// The point of offset `y`.
@@ -455,11 +383,15 @@ impl SearchGaussian {
         &self.mean + y * self.sigma
     }
 
-    /// `C^{-1/2} y` (with the low-rank metric, `M^{-1} D^{-1} y`: the draw's `z`).
+    /// `C^{-1/2} y` (with diagonal decoding `C^{-1/2} D^{-1} y`, with the low-rank metric
+    /// `M^{-1} D^{-1} y`: the draw's `z`).
     fn inv_sqrt(&self, y: &DVector<f64>) -> DVector<f64> {
         match (&self.full, &self.low_rank) {
             (Some((_, b)), _) => {
-                let mut t = b.tr_mul(y);
+                let mut t = match &self.decoding {
+                    Some(decoding) => b.tr_mul(&y.component_div(&decoding.scale)),
+                    None => b.tr_mul(y),
+                };
                 for (ti, di) in t.iter_mut().zip(self.d.iter()) {
                     *ti /= *di;
                 }
@@ -490,12 +422,50 @@ impl SearchGaussian {
         (Cow::Owned(each), Cow::Owned(dz(zw.clone())))
     }
 
+    /// With diagonal decoding, what a generation's update needs besides the plain full
+    /// metric's: `D`'s path moved along `yw` and whitened, the selected draws whitened with
+    /// their weights (for `D`), and the path `pc` and the offsets decoded by `D` (for `C`).
+    fn decode(
+        &mut self,
+        ys: &[DVector<f64>],
+        order: &[usize],
+        yw: &DVector<f64>,
+        hs: f64,
+    ) -> Option<Decoded> {
+        let mueff = self.p.mueff;
+        self.decoding.as_mut()?.follow(yw, hs, mueff);
+        let decoding = self.decoding.as_ref()?;
+        let white_selected = order
+            .iter()
+            .zip(&self.p.weights)
+            .take_while(|(_, &w)| w > 0.0)
+            .map(|(&k, &w)| (w, self.inv_sqrt(&ys[k])))
+            .collect();
+        Some(Decoded {
+            white_path: self.inv_sqrt(decoding.path()),
+            white_selected,
+            pc: self.pc.component_div(&decoding.scale),
+            ys: ys
+                .iter()
+                .map(|y| y.component_div(&decoding.scale))
+                .collect(),
+        })
+    }
+
     /// The variance of coordinate `i` (before `sigma^2`).
     fn variance(&self, i: usize) -> f64 {
+        let scale = self.decoding.as_ref().map_or(1.0, |dd| dd.scale[i]);
         match &self.full {
-            Some((cov, _)) => cov[(i, i)],
+            Some((cov, _)) => scale * scale * cov[(i, i)],
             None => self.d[i] * self.d[i],
         }
+    }
+
+    /// The largest and the smallest scale of `D` (1 without diagonal decoding).
+    fn decoding_range(&self) -> (f64, f64) {
+        self.decoding
+            .as_ref()
+            .map_or((1.0, 1.0), |dd| (dd.scale.max(), dd.scale.min()))
     }
 
     /// Updates the distribution from a generation's offsets (already repaired to the points
@@ -554,6 +524,8 @@ impl SearchGaussian {
         let cc = p.cc;
         self.pc
             .axpy(hs * (cc * (2.0 - cc) * p.mueff).sqrt(), &dw, 1.0 - cc);
+        let decoded = self.decode(ys, &order, &yw, hs);
+        let p = &self.p;
 
         // Covariance: rank-one, rank-mu and the active (negative) update.
         let (c1, cmu) = (self.c1, self.cmu);
@@ -581,8 +553,12 @@ impl SearchGaussian {
         }
         match &mut self.full {
             Some((cov, _)) => {
+                let (pc, ys) = match &decoded {
+                    Some(dec) => (&dec.pc, dec.ys.as_slice()),
+                    None => (&self.pc, ys),
+                };
                 *cov *= decay;
-                cov.ger(c1, &self.pc, &self.pc, 1.0);
+                cov.ger(c1, pc, pc, 1.0);
                 for &(w, k) in &terms {
                     cov.ger(w, &ys[k], &ys[k], 1.0);
                 }
@@ -599,6 +575,10 @@ impl SearchGaussian {
         }
         if let Some(low_rank) = &mut self.low_rank {
             low_rank.update(&inv, self.p.mueff);
+        }
+        if let (Some(decoding), Some(dec)) = (&mut self.decoding, decoded) {
+            let cond_sqrt = self.d.max() / self.d.min();
+            decoding.update(&dec.white_path, &dec.white_selected, cond_sqrt);
         }
 
         // Step size: TPA's warm-up (diagonal metric), then cumulative step-size adaptation;
@@ -644,6 +624,9 @@ impl SearchGaussian {
         let Some((cov, b)) = &mut self.full else {
             return;
         };
+        if let Some(decoding) = &mut self.decoding {
+            decoding.absorb(cov);
+        }
         let sym = (&*cov + cov.transpose()) * 0.5;
         let eig = SymmetricEigen::new(sym);
         let floor = eig.eigenvalues.max().abs() * 1e-20 + f64::MIN_POSITIVE;
