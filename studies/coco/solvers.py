@@ -55,12 +55,17 @@ def minimize_box_decoded(f: Callable, box: Box) -> None:
     minimize_box(f, box, metric="decoded")
 
 
-def minimize_int(f: Callable, box: Box) -> None:
+def minimize_int(f: Callable, box: Box, **options: object) -> None:
     """``plateau_free.minimize`` with the box and ``integrality=`` the integer variables."""
     import plateau_free
 
     plateau_free.minimize(f, box.x0, bounds=list(zip(box.lower, box.upper)), budget=box.budget,
-                          seed=box.seed, target=box.target, integrality=box.flags)
+                          seed=box.seed, target=box.target, integrality=box.flags, **options)
+
+
+def minimize_int_decoded(f: Callable, box: Box) -> None:
+    """``minimize_int`` with the diagonally decoded full metric (``metric='decoded'``)."""
+    minimize_int(f, box, metric="decoded")
 
 
 def minimize_plain(f: Callable, box: Box) -> None:
@@ -167,6 +172,7 @@ def random_search(f: Callable, box: Box) -> None:
 
 SOLVERS: dict[str, tuple[Callable[[Callable, Box], None], str]] = {
     "minimize-int": (minimize_int, "`minimize` with the box and `integrality=`"),
+    "minimize-int-decoded": (minimize_int_decoded, "`minimize` with the box, `integrality=` and `metric='decoded'`"),
     "minimize-box": (minimize_box, "`minimize` with the box"),
     "minimize-box-decoded": (minimize_box_decoded, "`minimize` with the box and `metric='decoded'`"),
     "minimize": (minimize_plain, "`minimize(f, x0, budget=, seed=)`"),
