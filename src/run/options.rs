@@ -58,9 +58,9 @@ pub enum Metric {
     /// The diagonal under them learns at the full metric's rates.
     LowRank,
     /// The full covariance decoded by a diagonal one learned much faster (dd-CMA-ES: Akimoto
-    /// and Hansen, Evolutionary Computation 28(3), 2020): the covariance is `D C D`, `C` as
-    /// [`Metric::Full`] learns it and `D` at rates of order `n^-0.75`, slowed while `C` is far
-    /// from a multiple of the identity. Learns axis-parallel scales about as fast as
+    /// and Hansen, Evolutionary Computation 28(3), 2020): the covariance is `D C D`, `C` learned
+    /// as [`Metric::Full`] learns its covariance (at the paper's rates) and `D` at rates of
+    /// order `n^-0.75`, slowed while `C` is far from a multiple of the identity. Learns axis-parallel scales about as fast as
     /// [`Metric::Diagonal`] and rotated structure as [`Metric::Full`] does; costs as much as
     /// the full metric. Refused above [`FULL_METRIC_LIMIT`] dimensions.
     Decoded,

@@ -79,20 +79,7 @@ impl Params {
     pub fn new(n: usize, lambda: usize) -> Params {
         let nf = n as f64;
         let lambda = lambda.max(2);
-        let mu = lambda / 2;
-        let raw: Vec<f64> = (0..lambda)
-            .map(|i| ((lambda as f64 + 1.0) / 2.0).ln() - ((i + 1) as f64).ln())
-            .collect();
-        let pos_sum: f64 = raw[..mu].iter().sum();
-        let pos_sq: f64 = raw[..mu].iter().map(|w| w * w).sum();
-        let mueff = pos_sum * pos_sum / pos_sq;
-        let neg_sum: f64 = raw[mu..].iter().filter(|w| **w < 0.0).sum();
-        let neg_sq: f64 = raw[mu..].iter().filter(|w| **w < 0.0).map(|w| w * w).sum();
-        let mueff_neg = if neg_sq > 0.0 {
-            neg_sum * neg_sum / neg_sq
-        } else {
-            0.0
-        };
+        let mueff = Params::mueff(lambda);
         let cc = (4.0 + mueff / nf) / (nf + 4.0 + 2.0 * mueff / nf);
         let cs = (mueff + 2.0) / (nf + mueff + 5.0);
         let c1 = 2.0 / ((nf + 1.3).powi(2) + mueff);
@@ -100,22 +87,11 @@ impl Params {
             .min(1.0 - c1)
             .max(0.0);
         let ds = 1.0 + 2.0 * (((mueff - 1.0) / (nf + 1.0)).sqrt() - 1.0).max(0.0) + cs;
-        let mut weights = Vec::with_capacity(lambda);
-        weights.extend(raw[..mu].iter().map(|w| w / pos_sum));
-        let neg_scale = if neg_sum < 0.0 && cmu > 0.0 {
-            let alpha_mu = 1.0 + c1 / cmu;
-            let alpha_mueff = 1.0 + 2.0 * mueff_neg / (mueff + 2.0);
-            let alpha_posdef = (1.0 - c1 - cmu) / (nf * cmu);
-            alpha_mu.min(alpha_mueff).min(alpha_posdef) / -neg_sum
-        } else {
-            0.0
-        };
-        weights.extend(raw[mu..].iter().map(|w| w.min(0.0) * neg_scale));
         let chi_n = nf.sqrt() * (1.0 - 1.0 / (4.0 * nf) + 1.0 / (21.0 * nf * nf));
         Params {
             lambda,
-            mu,
-            weights,
+            mu: lambda / 2,
+            weights: Vec::new(),
             mueff,
             cc,
             cs,
@@ -124,6 +100,51 @@ impl Params {
             ds,
             chi_n,
         }
+        .with_rates(n, c1, cmu)
+    }
+
+    /// The log-rank weights before scaling: positive for the best half.
+    fn raw_weights(lambda: usize) -> Vec<f64> {
+        (0..lambda)
+            .map(|i| ((lambda as f64 + 1.0) / 2.0).ln() - ((i + 1) as f64).ln())
+            .collect()
+    }
+
+    /// The variance-effective selection mass of the positive weights.
+    fn mueff(lambda: usize) -> f64 {
+        let raw = Params::raw_weights(lambda);
+        let pos = &raw[..lambda / 2];
+        let sum: f64 = pos.iter().sum();
+        sum * sum / pos.iter().map(|w| w * w).sum::<f64>()
+    }
+
+    /// The same with the covariance's rank-one and rank-mu rates `c1` and `cmu`, and the
+    /// active update's negative weights sized for them (Hansen 2016, Table 1).
+    pub fn with_rates(mut self, n: usize, c1: f64, cmu: f64) -> Params {
+        let raw = Params::raw_weights(self.lambda);
+        let mu = self.mu;
+        let pos_sum: f64 = raw[..mu].iter().sum();
+        let neg: Vec<f64> = raw[mu..].iter().copied().filter(|w| *w < 0.0).collect();
+        let neg_sum: f64 = neg.iter().sum();
+        let neg_sq: f64 = neg.iter().map(|w| w * w).sum();
+        let mueff_neg = if neg_sq > 0.0 {
+            neg_sum * neg_sum / neg_sq
+        } else {
+            0.0
+        };
+        let neg_scale = if neg_sum < 0.0 && cmu > 0.0 {
+            let alpha_mu = 1.0 + c1 / cmu;
+            let alpha_mueff = 1.0 + 2.0 * mueff_neg / (self.mueff + 2.0);
+            let alpha_posdef = (1.0 - c1 - cmu) / (n as f64 * cmu);
+            alpha_mu.min(alpha_mueff).min(alpha_posdef) / -neg_sum
+        } else {
+            0.0
+        };
+        self.weights = raw[..mu].iter().map(|w| w / pos_sum).collect();
+        self.weights
+            .extend(raw[mu..].iter().map(|w| w.min(0.0) * neg_scale));
+        (self.c1, self.cmu) = (c1, cmu);
+        self
     }
 
     /// The default population: `4 + floor(3 ln n)`.
@@ -303,6 +324,9 @@ impl SearchGaussian {
     pub fn with_decoding(mut self) -> SearchGaussian {
         if let Some((cov, b)) = &mut self.full {
             self.decoding = Some(Decoding::new(&self.d, &self.p));
+            let (c1, cmu) = decoding::correlation_rates(&self.p, self.n);
+            self.p = self.p.clone().with_rates(self.n, c1, cmu);
+            (self.c1, self.cmu) = (c1, cmu);
             *cov = DMatrix::identity(self.n, self.n);
             *b = DMatrix::identity(self.n, self.n);
             self.d.fill(1.0);
