@@ -215,7 +215,7 @@ _OPTIONS: dict[str, _Option] = {
         at least 2); each restart doubles it."""),
     "metric": _row(_metric, _SEARCH, "str, optional", """
         Adaptive, polished: the metric the search distribution learns (``Metric``):
-        ``'auto'`` (default: ``'full'`` up to n = 40, ``'decoded'`` from 41 to 200,
+        ``'auto'`` (default: ``'full'`` up to n = 19, ``'decoded'`` from 20 to 200,
         ``'diagonal'`` above), ``'full'`` (a
         covariance: rotated, ill-conditioned functions; ``O(n^2)`` per evaluation, refused
         above n = 10,000), ``'decoded'`` (the full covariance decoded by a diagonal one

@@ -158,7 +158,8 @@ def tasks(a: argparse.Namespace, done: set[tuple]) -> Iterator[tuple]:
     for name in a.suites:
         solvers = a.solvers
         if name == "bbob":  # nothing to declare: the declared run and CMAwM are the box's
-            solvers = [s for s in solvers if s not in ("minimize-int", "pycma-int", "cmawm")]
+            solvers = [s for s in solvers
+                       if not s.startswith("minimize-int") and s not in ("pycma-int", "cmawm")]
         # The largest dimensions first, so that the slowest runs are not left for the end.
         for n in sorted(a.dims, reverse=True):
             for fid in a.functions:

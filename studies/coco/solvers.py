@@ -55,6 +55,11 @@ def minimize_box_decoded(f: Callable, box: Box) -> None:
     minimize_box(f, box, metric="decoded")
 
 
+def minimize_box_full(f: Callable, box: Box) -> None:
+    """``minimize_box`` with the plain full metric (``metric='full'``)."""
+    minimize_box(f, box, metric="full")
+
+
 def minimize_int(f: Callable, box: Box, **options: object) -> None:
     """``plateau_free.minimize`` with the box and ``integrality=`` the integer variables."""
     import plateau_free
@@ -66,6 +71,11 @@ def minimize_int(f: Callable, box: Box, **options: object) -> None:
 def minimize_int_decoded(f: Callable, box: Box) -> None:
     """``minimize_int`` with the diagonally decoded full metric (``metric='decoded'``)."""
     minimize_int(f, box, metric="decoded")
+
+
+def minimize_int_full(f: Callable, box: Box) -> None:
+    """``minimize_int`` with the plain full metric (``metric='full'``)."""
+    minimize_int(f, box, metric="full")
 
 
 def minimize_plain(f: Callable, box: Box) -> None:
@@ -173,8 +183,10 @@ def random_search(f: Callable, box: Box) -> None:
 SOLVERS: dict[str, tuple[Callable[[Callable, Box], None], str]] = {
     "minimize-int": (minimize_int, "`minimize` with the box and `integrality=`"),
     "minimize-int-decoded": (minimize_int_decoded, "`minimize` with the box, `integrality=` and `metric='decoded'`"),
+    "minimize-int-full": (minimize_int_full, "`minimize` with the box, `integrality=` and `metric='full'`"),
     "minimize-box": (minimize_box, "`minimize` with the box"),
     "minimize-box-decoded": (minimize_box_decoded, "`minimize` with the box and `metric='decoded'`"),
+    "minimize-box-full": (minimize_box_full, "`minimize` with the box and `metric='full'`"),
     "minimize": (minimize_plain, "`minimize(f, x0, budget=, seed=)`"),
     "pycma-int": (pycma_int, "pycma BIPOP-CMA-ES, the box and `integer_variables`"),
     "pycma-box": (pycma_box, "pycma BIPOP-CMA-ES, the box"),

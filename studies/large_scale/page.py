@@ -368,7 +368,6 @@ def overhead(rows: list[Row]) -> list[str]:
 BBOB_METHODS = {
     "minimize": "`minimize` (default)",
     "minimize-box": "`minimize` (the box [-5, 5])",
-    "minimize-decoded": "`minimize` (`metric='decoded'`)",
     "minimize-full": "`minimize` (`metric='full'`)",
     "sepcma": "sep-CMA-ES (pycma)",
     **PEERS,
@@ -377,10 +376,8 @@ BBOB_METHODS = {
 BBOB_SEVEN = [2, 1, 10, 8, 12, 7, 15]
 BBOB_GRID = {n: list(range(1, 25)) for n in (20, 40, 80, 160)} | {320: BBOB_SEVEN, 640: BBOB_SEVEN}
 PEERS_BBOB_GRID = {n: BBOB_SEVEN for n in (80, 160, 320, 640)}
-# `metric='decoded'` where the default's metric is full (from n = 41 on it is the default's),
-# and `metric='full'` where the default's is decoded.
-DECODED_BBOB_GRID = {n: list(range(1, 25)) for n in (20, 40, 80, 160)}
-FULL_BBOB_GRID = {n: list(range(1, 25)) for n in (80, 160)}
+# `metric='full'` where the default's metric is the decoded one.
+FULL_BBOB_GRID = {n: list(range(1, 25)) for n in (20, 40, 80, 160)}
 
 
 def bbob_score(runs: dict[tuple[int, int], dict[str, Row]], keys: list[tuple[int, int]], m: str) -> str:
@@ -433,8 +430,8 @@ def bbob_missing(rows: list[Row]) -> list[str]:
     have = {(r["method"], int(r["n"]), int(r["function"])) for r in rows}
     out = []
     for method in BBOB_METHODS:
-        grid = {"minimize-decoded": DECODED_BBOB_GRID, "minimize-full": FULL_BBOB_GRID}.get(
-            method, PEERS_BBOB_GRID if method in PEERS else BBOB_GRID)
+        grid = FULL_BBOB_GRID if method == "minimize-full" else (
+            PEERS_BBOB_GRID if method in PEERS else BBOB_GRID)
         for n, functions in grid.items():
             lost = [f for f in functions if (method, n, f) not in have]
             if lost:

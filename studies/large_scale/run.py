@@ -198,7 +198,6 @@ BBOB_MINIMIZE: dict[str, dict[str, object]] = {
     "minimize": {},
     "minimize-box": {"bounds": [(-5.0, 5.0)]},
     "minimize-lowrank": {"metric": "low_rank"},
-    "minimize-decoded": {"metric": "decoded"},
     "minimize-full": {"metric": "full"},
 }
 
