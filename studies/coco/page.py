@@ -119,21 +119,34 @@ def second(name: str, runs: list[dict[str, Any]]) -> str:
 
 
 POOLED = (" Every instance above, development and second sample together, for the solvers that "
-          "ran both.")
+          "ran both, on the functions and dimensions of the second sample.")
+
+
+def common(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The runs of the problems that every solver among ``runs`` ran: a grid that a stop cut
+    short is scored like with like."""
+    key = lambda r: (r["suite"], r["f"], r["n"], r["instance"])  # noqa: E731
+    ran: dict[str, set] = {}
+    for r in runs:
+        ran.setdefault(r["solver"], set()).add(key(r))
+    shared = set.intersection(*ran.values()) if ran else set()
+    return [r for r in runs if key(r) in shared]
 
 
 def instance_sections(name: str, runs: list[dict[str, Any]]) -> list[str]:
     """A suite's development instances; then, when it ran others, those (a second sample) and
-    every instance pooled, for the solvers that ran the others."""
-    development = [r for r in runs if r["instance"] in DEVELOPMENT]
-    others = [r for r in runs if r["instance"] not in DEVELOPMENT]
+    every instance of the second sample's functions and dimensions pooled, for the solvers
+    that ran both; each on the problems that all of its solvers ran."""
+    development = common([r for r in runs if r["instance"] in DEVELOPMENT])
+    others = common([r for r in runs if r["instance"] not in DEVELOPMENT])
     lines = ["", *suite_section(name, development)] if development else []
     if not others:
         return lines
     instances = spans(sorted({r["instance"] for r in others}))
     lines += ["", *suite_section(f"{name}, instances {instances}", others, second(name, others))]
     both = {r["solver"] for r in others} & {r["solver"] for r in development}
-    pooled = [r for r in runs if r["solver"] in both]
+    cells = {(r["f"], r["n"]) for r in others}
+    pooled = [r for r in development + others if r["solver"] in both and (r["f"], r["n"]) in cells]
     everything = spans(sorted({r["instance"] for r in pooled}))
     return lines + ["", *suite_section(f"{name}, instances {everything}", pooled, POOLED)]
 
