@@ -32,7 +32,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from studies.coco.solvers import SOLVERS, SUBSET_SOLVERS, Box, Done
+from studies.coco.solvers import DECLARES_INTEGERS, SOLVERS, SUBSET_SOLVERS, Box, Done
 
 DEFAULT_RUNS = "docs/results/coco"
 _SUITES: dict[str, Any] = {}
@@ -158,8 +158,7 @@ def tasks(a: argparse.Namespace, done: set[tuple]) -> Iterator[tuple]:
     for name in a.suites:
         solvers = a.solvers
         if name == "bbob":  # nothing to declare: the declared run and CMAwM are the box's
-            solvers = [s for s in solvers
-                       if not s.startswith("minimize-int") and s not in ("pycma-int", "cmawm")]
+            solvers = [s for s in solvers if s not in DECLARES_INTEGERS]
         # The largest dimensions first, so that the slowest runs are not left for the end.
         for n in sorted(a.dims, reverse=True):
             for fid in a.functions:

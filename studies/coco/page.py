@@ -122,15 +122,19 @@ POOLED = (" Every instance above, development and second sample together, for th
           "ran both, on the functions and dimensions of the second sample.")
 
 
+def problem(r: dict[str, Any]) -> tuple:
+    """The problem a run solved: suite, function, dimension and instance."""
+    return (r["suite"], r["f"], r["n"], r["instance"])
+
+
 def common(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """The runs of the problems that every solver among ``runs`` ran: a grid that a stop cut
     short is scored like with like."""
-    key = lambda r: (r["suite"], r["f"], r["n"], r["instance"])  # noqa: E731
     ran: dict[str, set] = {}
     for r in runs:
-        ran.setdefault(r["solver"], set()).add(key(r))
+        ran.setdefault(r["solver"], set()).add(problem(r))
     shared = set.intersection(*ran.values()) if ran else set()
-    return [r for r in runs if key(r) in shared]
+    return [r for r in runs if problem(r) in shared]
 
 
 def instance_sections(name: str, runs: list[dict[str, Any]]) -> list[str]:
@@ -153,8 +157,7 @@ def instance_sections(name: str, runs: list[dict[str, Any]]) -> list[str]:
 
 def subset_section(solver: str, runs: list[dict[str, Any]]) -> list[str]:
     """Every solver on exactly the problems ``solver`` ran (a subset of the grid)."""
-    key = lambda r: (r["suite"], r["f"], r["n"], r["instance"])  # noqa: E731
-    ran = {key(r) for r in runs if r["solver"] == solver}
+    ran = {problem(r) for r in runs if r["solver"] == solver}
     if not ran:
         return []
     lines = ["", f"## {SOLVERS[solver][1]}, on a subset", "",
@@ -162,7 +165,7 @@ def subset_section(solver: str, runs: list[dict[str, Any]]) -> list[str]:
              "here on exactly those problems, so the cells compare like with like (they differ "
              "from the tables above, which average over more instances)."]
     for name in ("bbob-mixint", "bbob"):
-        mine = [r for r in runs if r["suite"] == name and key(r) in ran]
+        mine = [r for r in runs if r["suite"] == name and problem(r) in ran]
         if mine:
             dims = sorted({r["n"] for r in mine})
             instances = spans(sorted({r["instance"] for r in mine}))

@@ -8,6 +8,7 @@ the run's seed. Every solver gets the same budget, the same start (COCO's
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import Callable
 
 import numpy as np
@@ -50,32 +51,12 @@ def minimize_box(f: Callable, box: Box, **options: object) -> None:
                           seed=box.seed, target=box.target, **options)
 
 
-def minimize_box_decoded(f: Callable, box: Box) -> None:
-    """``minimize_box`` with the diagonally decoded full metric (``metric='decoded'``)."""
-    minimize_box(f, box, metric="decoded")
-
-
-def minimize_box_full(f: Callable, box: Box) -> None:
-    """``minimize_box`` with the plain full metric (``metric='full'``)."""
-    minimize_box(f, box, metric="full")
-
-
 def minimize_int(f: Callable, box: Box, **options: object) -> None:
     """``plateau_free.minimize`` with the box and ``integrality=`` the integer variables."""
     import plateau_free
 
     plateau_free.minimize(f, box.x0, bounds=list(zip(box.lower, box.upper)), budget=box.budget,
                           seed=box.seed, target=box.target, integrality=box.flags, **options)
-
-
-def minimize_int_decoded(f: Callable, box: Box) -> None:
-    """``minimize_int`` with the diagonally decoded full metric (``metric='decoded'``)."""
-    minimize_int(f, box, metric="decoded")
-
-
-def minimize_int_full(f: Callable, box: Box) -> None:
-    """``minimize_int`` with the plain full metric (``metric='full'``)."""
-    minimize_int(f, box, metric="full")
 
 
 def minimize_plain(f: Callable, box: Box) -> None:
@@ -182,11 +163,11 @@ def random_search(f: Callable, box: Box) -> None:
 
 SOLVERS: dict[str, tuple[Callable[[Callable, Box], None], str]] = {
     "minimize-int": (minimize_int, "`minimize` with the box and `integrality=`"),
-    "minimize-int-decoded": (minimize_int_decoded, "`minimize` with the box, `integrality=` and `metric='decoded'`"),
-    "minimize-int-full": (minimize_int_full, "`minimize` with the box, `integrality=` and `metric='full'`"),
+    "minimize-int-decoded": (partial(minimize_int, metric="decoded"), "`minimize` with the box, `integrality=` and `metric='decoded'`"),
+    "minimize-int-full": (partial(minimize_int, metric="full"), "`minimize` with the box, `integrality=` and `metric='full'`"),
     "minimize-box": (minimize_box, "`minimize` with the box"),
-    "minimize-box-decoded": (minimize_box_decoded, "`minimize` with the box and `metric='decoded'`"),
-    "minimize-box-full": (minimize_box_full, "`minimize` with the box and `metric='full'`"),
+    "minimize-box-decoded": (partial(minimize_box, metric="decoded"), "`minimize` with the box and `metric='decoded'`"),
+    "minimize-box-full": (partial(minimize_box, metric="full"), "`minimize` with the box and `metric='full'`"),
     "minimize": (minimize_plain, "`minimize(f, x0, budget=, seed=)`"),
     "pycma-int": (pycma_int, "pycma BIPOP-CMA-ES, the box and `integer_variables`"),
     "pycma-box": (pycma_box, "pycma BIPOP-CMA-ES, the box"),
@@ -194,6 +175,8 @@ SOLVERS: dict[str, tuple[Callable[[Callable, Box], None], str]] = {
     "ngopt": (ngopt, "nevergrad 1.0.12's NGOpt, the box and the integers cast"),
     "random": (random_search, "random search in the box"),
 }
+# The solvers that declare integer variables: on bbob, which has none, they are the box's.
+DECLARES_INTEGERS = {s for s in SOLVERS if s.startswith("minimize-int")} | {"pycma-int", "cmawm"}
 # Solvers too slow for the whole grid: run on a subset (``--solvers ngopt --dims 5,10
 # --instances 1``), and compared on the page only on the problems they ran.
 SUBSET_SOLVERS = ("ngopt",)
